@@ -1,0 +1,1 @@
+"""The motiondetect command line (installed as ``motiondetect_cli``)."""

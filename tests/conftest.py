@@ -1,0 +1,37 @@
+"""Shared fixtures: exact synthetic motion and the location of real clips."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from skimage import data
+
+SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def fourier_shift(image: np.ndarray, dx: float, dy: float) -> np.ndarray:
+    """Translate ``image`` by (dx, dy) px exactly (band-limited, periodic)."""
+    f = np.fft.fft2(image.astype(np.float64))
+    ky = np.fft.fftfreq(image.shape[0])[:, None]
+    kx = np.fft.fftfreq(image.shape[1])[None, :]
+    return np.real(np.fft.ifft2(f * np.exp(-2j * np.pi * (kx * dx + ky * dy))))
+
+
+def as_uint8(image: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+
+@pytest.fixture(scope="session")
+def photo() -> np.ndarray:
+    """A real 512x512 grey photograph (skimage's astronaut, green channel)."""
+    return data.astronaut()[..., 1].copy()
+
+
+def shared_path(*parts: str) -> Path:
+    """A path under ../shared/data, skipping the test when it is absent."""
+    path = SHARED_DATA.joinpath(*parts)
+    if not path.exists():
+        pytest.skip(f"real data not present: {path}")
+    return path
