@@ -125,8 +125,9 @@ def gradient_polar_lut(
     idx = _index(encode_gradient(gx), encode_gradient(gy))
     mag_code = tables.magnitude[idx]
     dir_code = tables.direction[idx].astype(np.float32)
-    direction = np.mod(dir_code * np.float32(_ANGLE_STEP) + np.float32(np.pi),
-                       np.float32(2 * np.pi)) - np.float32(np.pi)
+    direction = np.mod(
+        dir_code * np.float32(_ANGLE_STEP) + np.float32(np.pi), np.float32(2 * np.pi)
+    ) - np.float32(np.pi)
     return mag_code, tables.magnitude_decode[mag_code], direction
 
 

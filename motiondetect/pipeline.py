@@ -242,14 +242,18 @@ class NormalFlowPipeline:
         return self._measure(delayed, levels, self._geometry)
 
     def _measure(
-        self, delayed: tuple[np.ndarray, ...], current: tuple[np.ndarray, ...],
+        self,
+        delayed: tuple[np.ndarray, ...],
+        current: tuple[np.ndarray, ...],
         geometry: GridGeometry,
     ) -> NormalFlowField:
         cfg = self.config
         spacing = self._spacing(geometry, cfg.derivative_grid)
         flow, direction, gradient, valid = measure_level(delayed[0], current[0], spacing, cfg)
         key = np.where(valid, gradient, -1.0).astype(np.float32)
-        _, flow, direction, gradient, valid = stages.subsample(key, flow, direction, gradient, valid)
+        _, flow, direction, gradient, valid = stages.subsample(
+            key, flow, direction, gradient, valid
+        )
         level = np.zeros((GRID, GRID), np.uint8)
         if cfg.pyramid:
             c_flow, c_dir, c_grad, c_valid = measure_level(

@@ -170,7 +170,9 @@ _DERIVATIVE_TAPS = np.array([1.0, -8.0, 0.0, 8.0, -1.0], np.float32) / 12.0
 _PASS_THROUGH = np.array([1.0], np.float32)
 
 
-def gradients(average: np.ndarray, spacing_px: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+def gradients(
+    average: np.ndarray, spacing_px: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray]:
     """x and y partial derivatives: the two parallel convolutions.
 
     A 5-tap central difference, exact to fourth order, with no cross-axis
@@ -191,10 +193,20 @@ def gradients(average: np.ndarray, spacing_px: tuple[float, float]) -> tuple[np.
     gx, gy : (H, W) ndarray of float32
     """
     dx, dy = spacing_px
-    gx = cv2.sepFilter2D(average, cv2.CV_32F, _DERIVATIVE_TAPS / np.float32(dx), _PASS_THROUGH,
-                         borderType=cv2.BORDER_REPLICATE)
-    gy = cv2.sepFilter2D(average, cv2.CV_32F, _PASS_THROUGH, _DERIVATIVE_TAPS / np.float32(dy),
-                         borderType=cv2.BORDER_REPLICATE)
+    gx = cv2.sepFilter2D(
+        average,
+        cv2.CV_32F,
+        _DERIVATIVE_TAPS / np.float32(dx),
+        _PASS_THROUGH,
+        borderType=cv2.BORDER_REPLICATE,
+    )
+    gy = cv2.sepFilter2D(
+        average,
+        cv2.CV_32F,
+        _PASS_THROUGH,
+        _DERIVATIVE_TAPS / np.float32(dy),
+        borderType=cv2.BORDER_REPLICATE,
+    )
     return gx, gy
 
 
@@ -242,9 +254,7 @@ def normal_flow(
     return flow, valid
 
 
-def subsample(
-    key: np.ndarray, *fields: np.ndarray, grid: int = GRID
-) -> tuple[np.ndarray, ...]:
+def subsample(key: np.ndarray, *fields: np.ndarray, grid: int = GRID) -> tuple[np.ndarray, ...]:
     """The second ROISTORE: reduce (G*k, G*k) fields to (G, G).
 
     Each k x k block keeps the one sample where ``key`` is largest. With

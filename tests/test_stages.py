@@ -84,8 +84,9 @@ def _warp_pair(photo, matrix_half):
     for sign in (-1, 1):
         angle_deg, scale = matrix_half
         m = cv2.getRotationMatrix2D((w / 2 - 0.5, h / 2 - 0.5), sign * angle_deg, scale**sign)
-        frames.append(cv2.warpAffine(big, m, (w, h), flags=cv2.INTER_CUBIC,
-                                     borderMode=cv2.BORDER_REFLECT))
+        frames.append(
+            cv2.warpAffine(big, m, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+        )
     return frames
 
 
