@@ -1,0 +1,84 @@
+"""Annotated frames: boxes, flagged cells, observer class and the coarse field.
+
+Kept apart from detection (DVR-Scan's overlays): one ``annotate`` call per
+frame draws a :class:`~motiondetect.detection.FrameResult` onto an image.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .detection import FrameResult
+from .hough import REGIONS, STILL, UNKNOWN
+from .timeline import CLASS_COLOURS
+
+_FONT = cv2.FONT_HERSHEY_SIMPLEX
+_DETECTOR_COLOURS = {  # BGR
+    ("constraint-ray",): (0, 140, 255),
+    ("animate",): (255, 80, 200),
+    ("constraint-ray", "animate"): (0, 0, 255),
+}
+
+
+def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
+    scale = min(1.0, long_side / max(width, height))
+    return (max(2, int(round(width * scale / 2)) * 2), max(2, int(round(height * scale / 2)) * 2))
+
+
+def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> np.ndarray:
+    """Draw ``result`` on a copy of ``image`` resized to ``size`` (width, height)."""
+    h0, w0 = image.shape[:2]
+    out = (
+        cv2.resize(image, size, interpolation=cv2.INTER_AREA) if (w0, h0) != size else image.copy()
+    )
+    sx, sy = size[0] / w0, size[1] / h0
+    if result.flagged.any():
+        overlay = cv2.resize(result.flagged.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST)
+        tint = out.copy()
+        tint[overlay > 0] = (0, 0, 255)
+        out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
+    for region in result.regions:
+        x, y, w, h = region.bbox
+        colour = _DETECTOR_COLOURS.get(tuple(region.detectors), (0, 255, 255))
+        p0 = (int(x * sx), int(y * sy))
+        p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
+        cv2.rectangle(out, p0, p1, colour, 2)
+        cv2.putText(out, f"{region.score:.2f}", (p0[0] + 2, p0[1] + 12), _FONT, 0.4, colour, 1)
+    _draw_coarse(out, result)
+    _draw_label(out, result)
+    return out
+
+
+def _draw_coarse(out: np.ndarray, result: FrameResult) -> None:
+    """Figure 5, live: the 4x4 coarse field as arrows."""
+    coarse = result.coarse
+    if coarse is None:
+        return
+    h, w = out.shape[:2]
+    cell_w, cell_h = w / REGIONS, h / REGIONS
+    length = 0.35 * min(cell_w, cell_h)
+    for r in range(REGIONS):
+        for c in range(REGIONS):
+            centre = (int((c + 0.5) * cell_w), int((r + 0.5) * cell_h))
+            code = int(coarse.direction_index[r, c])
+            if code == UNKNOWN:
+                continue
+            if code == STILL:
+                cv2.circle(out, centre, 3, (255, 255, 255), -1)
+                continue
+            angle = code * np.pi / 4
+            tip = (int(centre[0] + length * np.cos(angle)), int(centre[1] + length * np.sin(angle)))
+            cv2.arrowedLine(out, centre, tip, (0, 0, 0), 3, cv2.LINE_AA, tipLength=0.3)
+            cv2.arrowedLine(out, centre, tip, (255, 255, 255), 1, cv2.LINE_AA, tipLength=0.3)
+
+
+def _draw_label(out: np.ndarray, result: FrameResult) -> None:
+    obs = result.observer
+    name = obs.name if obs is not None else ("warm-up" if result.warm_up else "-")
+    conf = f" {obs.confidence:.2f}" if obs is not None else ""
+    text = f"#{result.index} {result.time_s:7.2f}s  {name}{conf}"
+    colour = CLASS_COLOURS.get(obs.class_id if obs else -1, (255, 255, 255))
+    cv2.rectangle(out, (0, 0), (min(out.shape[1], 8 + 8 * len(text)), 18), (0, 0, 0), -1)
+    cv2.circle(out, (out.shape[1] - 10, 10), 6, colour, -1)
+    cv2.putText(out, text, (4, 13), _FONT, 0.45, (255, 255, 255), 1, cv2.LINE_AA)

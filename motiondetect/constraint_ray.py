@@ -1,0 +1,303 @@
+"""Detector 1: constraint ray filtering (section 3 of the paper).
+
+In a rigid world the flow at image point p lies on the segment
+``V_w + s * V_XY``, ``s`` in ``[0, a]`` (Figure 2). Its gradient-parallel
+component along unit normal ``n`` is therefore confined to the exclusive OR
+of the two disks whose diameters run from the origin to the segment's ends
+(Figure 4), which is the same as the interval between ``V_w . n`` and
+``(V_w + a V_XY) . n`` (docs/detectors.md); with ``a`` unbounded the far
+disk becomes a half-plane and one end of the interval goes to infinity.
+
+Per frame:
+
+1. Hough the normal flow into a coarse 4x4 field (:mod:`.hough`);
+2. match it against the canonical library, or take the known ego-motion
+   (:mod:`.observer_motion`, :mod:`.egomotion`);
+3. build the *filter image*: for every cell and each of 16 gradient
+   directions, a 32-bit mask of the signed normal-flow bins a rigid world
+   allows (the paper's bit encoding);
+4. encode every measurement, widened by its noise tolerance, as a bit mask
+   too; a measurement sharing no bit with the filter is flagged;
+5. drop isolated cells and group the rest into regions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .hough import CoarseField, coarse_field, measurement_tolerance
+from .observer_motion import ObserverMotion, classify, constraint_model
+from .pipeline import NormalFlowField
+from .regions import Region, drop_isolated, find_regions
+
+NAME = "constraint-ray"
+
+DIRECTION_BINS = 16  # over [0, pi): (n, m) and (-n, -m) are the same measurement
+_POSITIVE_EDGES = np.array(
+    [0.0, 0.125, 0.25, 0.375, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.5, 8.5]
+)
+#: Edges of the 32 signed normal-flow bins, work px/frame.
+MAGNITUDE_EDGES = np.concatenate([[-np.inf], -_POSITIVE_EDGES[:0:-1], _POSITIVE_EDGES, [np.inf]])
+MAGNITUDE_BINS = len(MAGNITUDE_EDGES) - 1  # 32
+
+
+# ----------------------------------------------------------------------------
+# Geometry of Figure 4
+# ----------------------------------------------------------------------------
+
+
+def allowed_interval(
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    depth_bound: float,
+    nx: np.ndarray,
+    ny: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Normal-flow values a rigid world allows, as an interval.
+
+    Parameters
+    ----------
+    rotation : (..., 2) ndarray
+        ``V_w``, work px/frame.
+    translation : (..., 2) ndarray
+        ``V_XY``; the flow at inverse depth ``s`` is ``V_w + s V_XY``.
+    depth_bound : float
+        ``a``, the largest inverse depth (``UNBOUNDED`` for a half-plane).
+    nx, ny : (...) ndarray
+        Unit gradient direction.
+
+    Returns
+    -------
+    lo, hi : (...) ndarray
+        ``m`` is consistent iff ``lo <= m <= hi``.
+    """
+    e1 = rotation[..., 0] * nx + rotation[..., 1] * ny
+    e2 = e1 + depth_bound * (translation[..., 0] * nx + translation[..., 1] * ny)
+    return np.minimum(e1, e2), np.maximum(e1, e2)
+
+
+def in_disk(point: np.ndarray, diameter_end: np.ndarray) -> np.ndarray:
+    """Is ``point`` in the closed disk whose diameter runs from 0 to ``diameter_end``?"""
+    centre = diameter_end / 2
+    return ((point - centre) ** 2).sum(-1) <= (centre**2).sum(-1) * (1 + 1e-9) + 1e-12
+
+
+def xor_of_disks(point: np.ndarray, v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
+    """Figure 4: the constraint region for the segment from ``v1`` to ``v2``."""
+    return in_disk(point, v1) ^ in_disk(point, v2)
+
+
+def disk_and_half_plane(point: np.ndarray, v1: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Figure 4 with ``a -> infinity``: the segment is a ray from ``v1`` along ``direction``.
+
+    The far disk grows into the half-plane ``point . direction > 0``; the
+    region is that half-plane minus the near disk, plus the near disk minus
+    the half-plane.
+    """
+    half = (point * direction).sum(-1) > 0
+    return in_disk(point, v1) ^ half
+
+
+# ----------------------------------------------------------------------------
+# Bit encoding: the filter image
+# ----------------------------------------------------------------------------
+
+
+def encode_interval(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Bit mask (uint32) of the magnitude bins that ``[lo, hi]`` touches."""
+    first = np.clip(np.searchsorted(MAGNITUDE_EDGES, lo, side="right") - 1, 0, MAGNITUDE_BINS - 1)
+    last = np.clip(np.searchsorted(MAGNITUDE_EDGES, hi, side="right") - 1, 0, MAGNITUDE_BINS - 1)
+    one = np.uint64(1)
+    upto_last = (one << (last.astype(np.uint64) + one)) - one
+    below_first = (one << first.astype(np.uint64)) - one
+    return (upto_last & ~below_first).astype(np.uint32)
+
+
+def decode_mask(mask: int) -> tuple[float, float]:
+    """The interval [lo, hi] of bin edges spanned by a contiguous mask."""
+    bits = [i for i in range(MAGNITUDE_BINS) if mask >> i & 1]
+    return float(MAGNITUDE_EDGES[bits[0]]), float(MAGNITUDE_EDGES[bits[-1] + 1])
+
+
+def fold_direction(direction_rad: np.ndarray, flow_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Map (theta, m) to the equivalent (theta', m') with theta' in [0, pi)."""
+    flip = direction_rad < 0
+    theta = np.where(flip, direction_rad + np.pi, direction_rad)
+    theta = np.where(theta >= np.pi, theta - np.pi, theta)
+    return theta, np.where(flip, -flow_px, flow_px)
+
+
+def direction_bin(theta: np.ndarray) -> np.ndarray:
+    return np.minimum((theta * (DIRECTION_BINS / np.pi)).astype(np.intp), DIRECTION_BINS - 1)
+
+
+def filter_image(model: ObserverMotion) -> np.ndarray:
+    """Encode a constraint model as a (64, 64, 16) uint32 filter image.
+
+    Bin ``b`` holds the allowed normal-flow bins for gradient directions in
+    ``[b, b + 1) * pi / 16``: the union of the intervals at the bin's two
+    edges and its centre, so the direction quantisation never forbids a
+    value the exact filter allows.
+    """
+    step = np.pi / DIRECTION_BINS
+    lo = hi = None
+    for offset in (0.0, 0.5, 1.0):
+        theta = (np.arange(DIRECTION_BINS) + offset) * step
+        nx, ny = np.cos(theta), np.sin(theta)
+        a, b = allowed_interval(
+            model.rotation_px[:, :, None, :],
+            model.translation_px[:, :, None, :],
+            model.depth_bound,
+            nx,
+            ny,
+        )
+        lo = a if lo is None else np.minimum(lo, a)
+        hi = b if hi is None else np.maximum(hi, b)
+    return encode_interval(lo, hi)
+
+
+def check_measurements(
+    filt: np.ndarray, field: NormalFlowField, tolerance: np.ndarray
+) -> np.ndarray:
+    """Cells whose measured normal flow shares no bit with the filter image.
+
+    Returns
+    -------
+    flagged : (64, 64) ndarray of bool
+    """
+    theta, m = fold_direction(field.direction_rad, field.flow_px)
+    bins = direction_bin(theta)
+    allowed = np.take_along_axis(filt, bins[..., None], axis=2)[..., 0]
+    measured = encode_interval(m - tolerance, m + tolerance)
+    return field.valid & ((allowed & measured) == 0)
+
+
+# ----------------------------------------------------------------------------
+# The detector
+# ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ConstraintRayConfig:
+    """Settings of the constraint ray filter.
+
+    Attributes
+    ----------
+    ego_model : {"fitted", "paper"}
+        ``paper``: the matched library entry as is, depth unbounded.
+        ``fitted``: class parameters and both ends of the speed range
+        estimated from the frame (docs/detectors.md).
+    noise_grey : float
+        Noise of the temporal difference, grey levels; the tolerance of a
+        measurement is ``noise_grey / |grad I|`` (times ``noise_sigmas``).
+    noise_sigmas : float
+    tolerance_floor_px : float
+        Smallest tolerance, work px/frame.
+    tolerance_relative : float
+        Extra tolerance proportional to ``|m|``.
+    min_neighbours : int
+        Flagged cells with fewer flagged 8-neighbours are dropped as noise.
+    min_cells : int
+        Smallest region kept, cells.
+    static_fraction : float
+        Share of still regions above which the observer is static.
+    min_confidence : float
+        Below this classification confidence nothing is flagged.
+    smoothing : int
+        Majority vote of the class over this many frames (1 = none).
+    """
+
+    ego_model: Literal["fitted", "paper"] = "fitted"
+    noise_grey: float = 1.0
+    noise_sigmas: float = 3.0
+    tolerance_floor_px: float = 0.3
+    tolerance_relative: float = 0.2
+    min_neighbours: int = 2
+    min_cells: int = 3
+    static_fraction: float = 0.6
+    min_confidence: float = 0.2
+    smoothing: int = 1
+
+    def __post_init__(self) -> None:
+        if self.ego_model not in ("fitted", "paper"):
+            raise ValueError(f"ego_model must be 'fitted' or 'paper', but got {self.ego_model!r}")
+        for name in ("noise_grey", "noise_sigmas", "tolerance_floor_px"):
+            if getattr(self, name) <= 0:
+                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
+        if self.smoothing < 1:
+            raise ValueError(f"smoothing must be at least 1, but got {self.smoothing}")
+
+
+@dataclass(frozen=True)
+class DetectorOutput:
+    """What a detector reports for one frame."""
+
+    flagged: np.ndarray  # (64, 64) bool, after noise removal
+    strength: np.ndarray  # (64, 64) float32 in [0, 1]
+    regions: list[Region]
+    observer: ObserverMotion | None = None
+    coarse: CoarseField | None = None
+    extra: dict = field(default_factory=dict)
+
+
+class ConstraintRayDetector:
+    """Flags motion no rigid world seen by the current observer motion could make.
+
+    Parameters
+    ----------
+    config : ConstraintRayConfig
+    egomotion : callable, optional
+        ``egomotion(frame_index, geometry) -> ObserverMotion | None``: known
+        camera motion. Where it answers, the classification is skipped.
+    """
+
+    name = NAME
+
+    def __init__(self, config: ConstraintRayConfig | None = None, egomotion=None) -> None:
+        self.config = config or ConstraintRayConfig()
+        self.egomotion = egomotion
+        self._recent_classes: list[int] = []
+
+    def _observer(self, field: NormalFlowField, coarse: CoarseField, frame_index: int):
+        cfg = self.config
+        if self.egomotion is not None:
+            known = self.egomotion(frame_index, field.geometry)
+            if known is not None:
+                return known
+        entry, class_id, confidence = classify(
+            coarse, field.geometry, static_fraction=cfg.static_fraction
+        )
+        if cfg.smoothing > 1:
+            self._recent_classes = [*self._recent_classes[-(cfg.smoothing - 1) :], class_id]
+            votes = np.bincount(np.array(self._recent_classes) + 1)
+            majority = int(votes.argmax()) - 1
+            if majority != class_id and votes[majority + 1] > votes[class_id + 1]:
+                confidence *= 0.5  # disagreeing with recent frames: trust less
+        return constraint_model(entry, class_id, confidence, coarse, field, mode=cfg.ego_model)
+
+    def process(self, field: NormalFlowField, frame_index: int = 0) -> DetectorOutput:
+        """Detect independent motion in one frame's normal flow."""
+        cfg = self.config
+        coarse = coarse_field(field, noise_grey=cfg.noise_grey)
+        observer = self._observer(field, coarse, frame_index)
+        empty = np.zeros(field.flow_px.shape, bool)
+        if not observer.constrains or observer.confidence < cfg.min_confidence:
+            return DetectorOutput(empty, empty.astype(np.float32), [], observer, coarse)
+        tol = cfg.noise_sigmas * measurement_tolerance(
+            field, cfg.noise_grey, cfg.tolerance_floor_px / cfg.noise_sigmas
+        ) + cfg.tolerance_relative * np.abs(field.flow_px)
+        flagged = check_measurements(filter_image(observer), field, tol)
+        flagged = drop_isolated(flagged, cfg.min_neighbours)
+        nx, ny = field.normal
+        lo, hi = allowed_interval(
+            observer.rotation_px, observer.translation_px, observer.depth_bound, nx, ny
+        )
+        excess = np.maximum(np.maximum(lo - field.flow_px, field.flow_px - hi), 0.0)
+        strength = np.where(flagged, excess / (excess + tol), 0.0).astype(np.float32)
+        regions = find_regions(
+            flagged, strength, field.geometry, min_cells=cfg.min_cells, detector=NAME
+        )
+        return DetectorOutput(flagged, strength, regions, observer, coarse)

@@ -1,0 +1,245 @@
+"""Score predicted masks against ground truth, changedetection.net style.
+
+Ground truth is a folder of PNG masks in any of these layouts (or a
+sequence folder holding one such folder as ``groundtruth/``,
+``Annotations/`` or ``masks/``):
+
+* CDnet / SBI / UCSD: ``gtNNNNNN.png``; 0 static, 50 shadow (static),
+  85 outside the region of interest and 170 unknown (both not scored),
+  255 moving;
+* DAVIS: ``NNNNN.png``, 0/255;
+* motiondetect synth: ``NNNNNN.png``, 0/170/255.
+
+GT files are sorted by the number in their names and aligned to predicted
+frames by subtracting the smallest number (UCSD starts at 1, the others at
+0), so GT number ``n`` scores predicted frame ``n - first``. A
+``temporalROI.txt`` next to the GT folder limits the frames scored.
+Predictions are ``masks/NNNNNN.png`` (0-based frame index) as
+``motiondetect detect --masks`` writes them.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .video import read_mask
+
+GT_FOLDERS = ("groundtruth", "Annotations", "masks")
+UNKNOWN_VALUES = (85, 170)
+
+
+class EvaluateError(ValueError):
+    """Inputs to evaluate cannot be used; one line for the user."""
+
+
+@dataclass
+class Counts:
+    """Pixel and object tallies for one sequence (or pooled)."""
+
+    tp: int = 0
+    fp: int = 0
+    fn: int = 0
+    tn: int = 0
+    objects: int = 0
+    objects_hit: int = 0
+    false_alarm_regions: int = 0
+    frames: int = 0
+
+    def add(self, other: Counts) -> None:
+        for name in self.__dataclass_fields__:
+            setattr(self, name, getattr(self, name) + getattr(other, name))
+
+    def metrics(self) -> dict[str, float | None]:
+        def ratio(a: float, b: float) -> float | None:
+            return a / b if b else None
+
+        recall = ratio(self.tp, self.tp + self.fn)
+        precision = ratio(self.tp, self.tp + self.fp)
+        total = self.tp + self.fp + self.fn + self.tn
+        f = (
+            2 * precision * recall / (precision + recall)
+            if precision and recall
+            else (0.0 if precision is not None and recall is not None else None)
+        )
+        return {
+            "recall": recall,
+            "specificity": ratio(self.tn, self.tn + self.fp),
+            "fpr": ratio(self.fp, self.fp + self.tn),
+            "fnr": ratio(self.fn, self.tp + self.fn),
+            "pwc": ratio(100.0 * (self.fn + self.fp), total),
+            "precision": precision,
+            "f_measure": f,
+            "object_recall": ratio(self.objects_hit, self.objects),
+            "false_alarm_regions_per_frame": ratio(self.false_alarm_regions, self.frames),
+            "frames": self.frames,
+        }
+
+
+@dataclass
+class SequenceScore:
+    name: str
+    counts: Counts = field(default_factory=Counts)
+
+
+def _number(path: Path) -> int | None:
+    found = re.findall(r"\d+", path.stem)
+    return int(found[-1]) if found else None
+
+
+def find_gt_folder(path: Path) -> Path:
+    if not path.is_dir():
+        raise EvaluateError(f"{path}: ground truth must be a folder of PNG masks")
+    for name in GT_FOLDERS:
+        if (path / name).is_dir():
+            return path / name
+    return path
+
+
+def _temporal_roi(gt_folder: Path) -> tuple[int, int] | None:
+    for candidate in (gt_folder / "temporalROI.txt", gt_folder.parent / "temporalROI.txt"):
+        if candidate.is_file():
+            try:
+                first, last = (int(v) for v in candidate.read_text().split()[:2])
+                return first, last
+            except ValueError:
+                return None
+    return None
+
+
+def score_frame(
+    pred: np.ndarray, gt: np.ndarray, min_object_px: int = 20, hit_fraction: float = 0.1
+) -> Counts:
+    """Tally one frame. ``pred`` > 127 is flagged; see the module doc for ``gt``."""
+    if pred.shape != gt.shape:
+        pred = cv2.resize(pred, (gt.shape[1], gt.shape[0]), interpolation=cv2.INTER_NEAREST)
+    flagged = pred > 127
+    ignore = np.isin(gt, UNKNOWN_VALUES)
+    positive = (gt >= 128) & ~ignore
+    scored = ~ignore
+    c = Counts(frames=1)
+    c.tp = int((flagged & positive).sum())
+    c.fp = int((flagged & ~positive & scored).sum())
+    c.fn = int((~flagged & positive).sum())
+    c.tn = int((~flagged & ~positive & scored).sum())
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(
+        positive.astype(np.uint8), connectivity=8
+    )
+    for label in range(1, n):
+        if stats[label, cv2.CC_STAT_AREA] < min_object_px:
+            continue
+        c.objects += 1
+        c.objects_hit += bool(flagged[labels == label].mean() >= hit_fraction)
+    moving_or_unknown = positive | (gt == 170)
+    n, labels = cv2.connectedComponents(flagged.astype(np.uint8), connectivity=8)
+    if n > 1:
+        touching = np.unique(labels[moving_or_unknown & flagged])
+        c.false_alarm_regions = int(n - 1 - np.count_nonzero(touching))
+    return c
+
+
+def evaluate_sequence(
+    pred: Path, gt: Path, *, warmup: int = 1, name: str | None = None, min_object_px: int = 20
+) -> SequenceScore:
+    """Score one sequence: ``pred`` is an output folder (or its ``masks/``)."""
+    pred_dir = pred / "masks" if (pred / "masks").is_dir() else pred
+    if not pred_dir.is_dir():
+        raise EvaluateError(f"{pred}: no predicted masks (run detect with --masks)")
+    gt_dir = find_gt_folder(gt)
+    gt_files = sorted(
+        (
+            p
+            for p in gt_dir.iterdir()
+            if p.suffix.lower() in (".png", ".bmp") and _number(p) is not None
+        ),
+        key=_number,
+    )
+    if not gt_files:
+        raise EvaluateError(f"{gt}: no ground-truth masks found")
+    first = _number(gt_files[0])
+    roi = _temporal_roi(gt_dir)
+    preds = {_number(p): p for p in pred_dir.glob("*.png") if _number(p) is not None}
+    score = SequenceScore(name or pred.name)
+    for gt_file in gt_files:
+        number = _number(gt_file)
+        index = number - first
+        if index < warmup or (roi and not roi[0] <= number <= roi[1]):
+            continue
+        pred_file = preds.get(index)
+        gt_mask = read_mask(gt_file)
+        if pred_file is None or gt_mask is None:
+            continue
+        pred_mask = read_mask(pred_file)
+        if pred_mask is None:
+            continue
+        score.counts.add(score_frame(pred_mask, gt_mask, min_object_px))
+    if score.counts.frames == 0:
+        raise EvaluateError(f"{pred}: no predicted frame matches the ground truth in {gt}")
+    return score
+
+
+def evaluate(pred: Path, gt: Path, *, warmup: int = 1) -> list[SequenceScore]:
+    """One sequence, or a batch: sub-folders of ``pred`` matched by name in ``gt``."""
+    if (pred / "masks").is_dir() or any(pred.glob("*.png")):
+        return [evaluate_sequence(pred, gt, warmup=warmup)]
+    scores = []
+    for sub in sorted(p for p in pred.iterdir() if p.is_dir()):
+        if (gt / sub.name).is_dir() and ((sub / "masks").is_dir()):
+            scores.append(evaluate_sequence(sub, gt / sub.name, warmup=warmup, name=sub.name))
+    if not scores:
+        raise EvaluateError(f"{pred}: found no predicted sequence matching {gt}")
+    return scores
+
+
+COLUMNS = (
+    "recall",
+    "specificity",
+    "fpr",
+    "fnr",
+    "pwc",
+    "precision",
+    "f_measure",
+    "object_recall",
+    "false_alarm_regions_per_frame",
+    "frames",
+)
+
+
+def table_rows(scores: list[SequenceScore]) -> list[dict]:
+    rows = [{"sequence": s.name, **s.counts.metrics()} for s in scores]
+    if len(scores) > 1:
+        pooled = Counts()
+        for s in scores:
+            pooled.add(s.counts)
+        rows.append({"sequence": "overall", **pooled.metrics()})
+    return rows
+
+
+def format_table(rows: list[dict]) -> str:
+    heads = [
+        "sequence",
+        "recall",
+        "spec",
+        "FPR",
+        "FNR",
+        "PWC",
+        "prec",
+        "F",
+        "obj.rec",
+        "FA/frm",
+        "frames",
+    ]
+    lines = ["  ".join(f"{h:>8s}" if i else f"{h:<16s}" for i, h in enumerate(heads))]
+    for row in rows:
+        cells = [f"{row['sequence'][:16]:<16s}"]
+        for key in COLUMNS:
+            v = row[key]
+            cells.append(
+                f"{'-':>8s}" if v is None else (f"{v:8d}" if key == "frames" else f"{v:8.3f}")
+            )
+        lines.append("  ".join(cells))
+    return "\n".join(lines)

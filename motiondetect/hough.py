@@ -1,0 +1,159 @@
+"""The Hough step of section 3.3: normal flow to a coarse 4x4 motion field.
+
+Each valid normal-flow measurement ``m`` along unit gradient ``n`` says the
+true flow ``v`` lies on the constraint line ``v . n = m``. Every candidate
+velocity collects the votes of the measurements whose line passes within
+their noise tolerance of it; in each of the 4x4 regions the candidate with
+most votes wins, is refined by least squares over its voters, and is
+quantised to one of 8 directions (Figure 5).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .pipeline import NormalFlowField
+from .stages import GRID
+
+REGIONS = 4
+DIRECTIONS = 8
+UNKNOWN, STILL = -1, DIRECTIONS  # codes in CoarseField.direction_index
+
+_HOUGH_DIRECTIONS = 32
+_HOUGH_SPEEDS_PX = np.array([0.3, 0.5, 0.8, 1.2, 1.8, 2.7, 4.0, 6.0, 9.0, 13.0], np.float32)
+
+
+@dataclass(frozen=True)
+class CoarseField:
+    """The coarse field of Figure 5.
+
+    Attributes
+    ----------
+    direction_index : (4, 4) ndarray of int8
+        0..7 (k * 45 degrees, image coordinates, 0 = right, 2 = down),
+        ``STILL`` (8) for no motion, ``UNKNOWN`` (-1) for too little data.
+    flow_px : (4, 4, 2) ndarray of float32
+        Refined (vx, vy) per region, work px/frame; zero when still/unknown.
+    support : (4, 4) ndarray of float32
+        Share of the region's valid measurements that voted for the winner.
+    count : (4, 4) ndarray of int
+        Valid measurements per region.
+    """
+
+    direction_index: np.ndarray
+    flow_px: np.ndarray
+    support: np.ndarray
+    count: np.ndarray
+
+    @property
+    def known(self) -> np.ndarray:
+        return self.direction_index != UNKNOWN
+
+    @property
+    def moving(self) -> np.ndarray:
+        return self.known & (self.direction_index != STILL)
+
+
+def _candidates() -> np.ndarray:
+    angles = np.arange(_HOUGH_DIRECTIONS) * (2 * np.pi / _HOUGH_DIRECTIONS)
+    unit = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    moving = (unit[None, :, :] * _HOUGH_SPEEDS_PX[:, None, None]).reshape(-1, 2)
+    return np.vstack([np.zeros((1, 2)), moving]).astype(np.float32)
+
+
+_CANDIDATES = _candidates()
+
+
+def _by_region(a: np.ndarray) -> np.ndarray:
+    """(..., 64, 64) -> (..., 16, 256): the cells of each 4x4 region."""
+    s = GRID // REGIONS
+    lead = a.shape[:-2]
+    return (
+        a.reshape(*lead, REGIONS, s, REGIONS, s)
+        .swapaxes(-3, -2)
+        .reshape(*lead, REGIONS * REGIONS, s * s)
+    )
+
+
+def measurement_tolerance(field: NormalFlowField, noise_grey: float, floor_px: float) -> np.ndarray:
+    """Per-cell noise tolerance of ``flow_px``: noise / |grad I|, with a floor.
+
+    The normal-flow error grows like 1/|grad I| (docs/detectors.md), so a
+    fixed tolerance would be too strict on weak edges and too loose on
+    strong ones.
+    """
+    grad = np.maximum(field.gradient, 1e-3)
+    return np.maximum(np.float32(floor_px), np.float32(noise_grey) / grad)
+
+
+def coarse_field(
+    field: NormalFlowField,
+    *,
+    noise_grey: float = 1.0,
+    floor_px: float = 0.15,
+    relative: float = 0.15,
+    min_count: int = 24,
+    min_support: float = 0.5,
+) -> CoarseField:
+    """Hough-transform the normal flow into a 4x4 field of 8 directions.
+
+    Parameters
+    ----------
+    field : NormalFlowField
+    noise_grey, floor_px : float
+        Measurement tolerance, see :func:`measurement_tolerance`.
+    relative : float
+        Extra tolerance proportional to the candidate speed.
+    min_count : int
+        A region with fewer valid measurements is UNKNOWN.
+    min_support : float
+        A region whose winner has fewer votes than this share is UNKNOWN.
+    """
+    nx, ny = field.normal
+    valid = _by_region(field.valid)  # (16, 256)
+    m = _by_region(field.flow_px)
+    n = np.stack([_by_region(nx), _by_region(ny)])  # (2, 16, 256)
+    tol = _by_region(measurement_tolerance(field, noise_grey, floor_px))
+    cand = _CANDIDATES  # (C, 2)
+    speed = np.hypot(cand[:, 0], cand[:, 1])
+    pred = np.einsum("cd,drp->crp", cand, n)  # (C, 16, 256)
+    within = np.abs(pred - m[None]) <= tol[None] + relative * speed[:, None, None]
+    within &= valid[None]
+    votes = within.sum(axis=2)  # (C, 16)
+    best = votes.argmax(axis=0)  # (16,)
+    count = valid.sum(axis=1)
+    region = np.arange(REGIONS * REGIONS)
+    support = votes[best, region] / np.maximum(count, 1)
+
+    flow = cand[best].copy()
+    # Least-squares refinement over the winner's voters: solve (sum n n^T) v = sum n m.
+    voters = within[best, region]  # (16, 256)
+    a = np.einsum("irp,jrp,rp->rij", n, n, voters.astype(np.float32))
+    b = np.einsum("irp,rp->ri", n, np.where(voters, m, 0.0))
+    det = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] ** 2
+    trace = a[:, 0, 0] + a[:, 1, 1]
+    conditioned = det > 0.05 * trace**2  # gradients span both axes
+    safe = np.where(conditioned, det, 1.0)
+    vx = (a[:, 1, 1] * b[:, 0] - a[:, 0, 1] * b[:, 1]) / safe
+    vy = (a[:, 0, 0] * b[:, 1] - a[:, 0, 1] * b[:, 0]) / safe
+    refined = np.stack([vx, vy], axis=1)
+    # Trust the refinement only near the winner: an ill-posed region can run away.
+    near = np.hypot(*(refined - flow).T) <= 0.5 * speed[best] + 0.3
+    refine = conditioned & (best > 0) & near
+    flow[refine] = refined[refine]
+
+    angle = np.arctan2(flow[:, 1], flow[:, 0])
+    index = np.rint(angle / (2 * np.pi / DIRECTIONS)).astype(int) % DIRECTIONS
+    index[best == 0] = STILL
+    flow[best == 0] = 0.0
+    index[(count < min_count) | (support < min_support)] = UNKNOWN
+    flow[index == UNKNOWN] = 0.0
+    shape = (REGIONS, REGIONS)
+    return CoarseField(
+        direction_index=index.reshape(shape).astype(np.int8),
+        flow_px=flow.reshape(*shape, 2).astype(np.float32),
+        support=support.reshape(shape).astype(np.float32),
+        count=count.reshape(shape),
+    )

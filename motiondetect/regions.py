@@ -1,0 +1,106 @@
+"""Flagged cells to scored regions, shared by both detectors."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .pipeline import GridGeometry
+
+_EIGHT = np.ones((3, 3), np.float32)
+
+
+@dataclass(frozen=True)
+class Region:
+    """One detection.
+
+    Attributes
+    ----------
+    bbox : [x, y, w, h]
+        Input pixels.
+    cells : (K, 2) ndarray of int
+        (row, col) of the grid cells it covers.
+    area_px : int
+        Area of its cells, input pixels.
+    score : float
+        Mean violation strength of its cells, in [0, 1].
+    detectors : tuple of str
+        Which detectors found it.
+    """
+
+    bbox: list[int]
+    cells: np.ndarray
+    area_px: int
+    score: float
+    detectors: tuple[str, ...] = field(default_factory=tuple)
+
+    def to_json(self) -> dict:
+        return {
+            "bbox": [int(v) for v in self.bbox],
+            "area_px": int(self.area_px),
+            "score": round(float(self.score), 4),
+            "detectors": list(self.detectors),
+        }
+
+
+def drop_isolated(flagged: np.ndarray, min_neighbours: int) -> np.ndarray:
+    """Keep flagged cells with at least ``min_neighbours`` flagged 8-neighbours."""
+    if min_neighbours <= 0:
+        return flagged
+    counts = cv2.filter2D(flagged.astype(np.float32), -1, _EIGHT, borderType=cv2.BORDER_CONSTANT)
+    return flagged & (counts - 1 >= min_neighbours - 0.5)
+
+
+def find_regions(
+    flagged: np.ndarray,
+    strength: np.ndarray,
+    geometry: GridGeometry,
+    *,
+    min_cells: int,
+    detector: str,
+) -> list[Region]:
+    """Group flagged cells into 8-connected regions.
+
+    Parameters
+    ----------
+    flagged : (64, 64) ndarray of bool
+    strength : (64, 64) ndarray of float32
+        Per-cell violation strength in [0, 1].
+    geometry : GridGeometry
+    min_cells : int
+        Smaller components are dropped as noise.
+    detector : str
+        Name recorded in each region's ``detectors``.
+    """
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        flagged.astype(np.uint8), connectivity=8
+    )
+    cw, ch = geometry.input_cell_px
+    regions = []
+    for label in range(1, count):
+        x, y, w, h, area = (int(v) for v in stats[label])
+        if area < min_cells:
+            continue
+        cells = np.argwhere(labels == label)
+        score = float(strength[labels == label].mean())
+        regions.append(
+            Region(
+                bbox=geometry.cell_box_to_input(x, y, w, h),
+                cells=cells,
+                area_px=round(area * cw * ch),
+                score=score,
+                detectors=(detector,),
+            )
+        )
+    regions.sort(key=lambda r: -r.area_px)
+    return regions
+
+
+def regions_mask(regions: list[Region], shape: tuple[int, int] = (64, 64)) -> np.ndarray:
+    """The (64, 64) boolean mask of the cells of ``regions``."""
+    mask = np.zeros(shape, bool)
+    for region in regions:
+        mask[region.cells[:, 0], region.cells[:, 1]] = True
+    return mask

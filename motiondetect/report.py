@@ -1,0 +1,124 @@
+"""Report writers: JSON lines, CSV and the summary. They take open files.
+
+``frames.jsonl`` is flushed line by line, so a crash loses no finished frame;
+the summary is written through :func:`atomic_text`, so it either exists
+complete or not at all (its presence marks an input as finished).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import json
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TextIO
+
+SCHEMA_VERSION = "1.0"
+
+DETECTION_COLUMNS = ["frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score"]
+EVENT_COLUMNS = [
+    "event",
+    "start_frame",
+    "end_frame",
+    "start_s",
+    "end_s",
+    "start_timecode",
+    "end_timecode",
+    "duration_s",
+    "peak_score",
+    "detectors",
+    "x",
+    "y",
+    "w",
+    "h",
+]
+
+
+@contextlib.contextmanager
+def atomic_text(path: str | Path) -> Iterator[TextIO]:
+    """Open ``path`` for writing through a temporary file renamed on success.
+
+    On an exception the temporary file is removed and ``path`` is untouched.
+    """
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.part{os.getpid()}")
+    try:
+        with open(tmp, "w", encoding="utf-8", newline="") as fp:
+            yield fp
+            fp.flush()
+            os.fsync(fp.fileno())
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+class FramesJsonlWriter:
+    """One JSON object per frame, flushed as it goes."""
+
+    def __init__(self, fp: TextIO) -> None:
+        self.fp = fp
+
+    def append(self, record: dict) -> None:
+        self.fp.write(json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n")
+        self.fp.flush()
+
+
+class DetectionsCsvWriter:
+    """One row per detection, with a header."""
+
+    def __init__(self, fp: TextIO) -> None:
+        self.fp = fp
+        self._csv = csv.writer(fp, lineterminator="\n")
+        self._csv.writerow(DETECTION_COLUMNS)
+
+    def append(self, frame: int, time_s: float, detection: dict) -> None:
+        x, y, w, h = detection["bbox"]
+        self._csv.writerow(
+            [
+                frame,
+                f"{time_s:.4f}",
+                "+".join(detection["detectors"]),
+                x,
+                y,
+                w,
+                h,
+                detection["area_px"],
+                f"{detection['score']:.4f}",
+            ]
+        )
+        self.fp.flush()
+
+
+def write_events_csv(fp: TextIO, events: list[dict], *, with_input: bool = False) -> None:
+    """Events as CSV; ``with_input`` adds a leading ``input`` column from ``ev["input"]``."""
+    writer = csv.writer(fp, lineterminator="\n")
+    writer.writerow((["input"] if with_input else []) + EVENT_COLUMNS)
+    for ev in events:
+        x, y, w, h = ev["bbox"]
+        writer.writerow(
+            ([ev["input"]] if with_input else [])
+            + [
+                ev["event"],
+                ev["start_frame"],
+                ev["end_frame"],
+                f"{ev['start_s']:.4f}",
+                f"{ev['end_s']:.4f}",
+                ev["start_timecode"],
+                ev["end_timecode"],
+                f"{ev['duration_s']:.4f}",
+                f"{ev['peak_score']:.4f}",
+                "+".join(ev["detectors"]),
+                x,
+                y,
+                w,
+                h,
+            ]
+        )
+
+
+def write_json(fp: TextIO, document: dict) -> None:
+    json.dump(document, fp, indent=2, allow_nan=False)
+    fp.write("\n")
