@@ -64,11 +64,19 @@ class AnimateConfig:
         Measurement tolerance, ``noise_sigmas * noise_grey / |grad I|``
         with a floor.
     accel_bins : int
-        Magnitude bins a value may move by between frames (smooth change).
+        Extra magnitude bins a value may move by between frames.
+    accel_relative : float
+        Relative change of ``|m|`` allowed between frames (smooth change).
     first_appearance : {"ignore", "flag"}
         Motion where no footprint landed: ignored (default: at weak-texture
         borders it is mostly noise), or flagged as the paper suggests.
     jitter_compensation : bool
+    min_gradient : float
+        Only measurements with at least this gradient (grey/work px) are
+        tested; weaker ones still make footprints.
+    border_cells : int
+        Cells this close to the frame edge are not tested: content entering
+        the frame has no predecessor to make a footprint.
     min_neighbours, min_cells : int
         Noise removal and smallest region, as in detector 1.
     """
@@ -79,9 +87,12 @@ class AnimateConfig:
     noise_grey: float = 1.0
     noise_sigmas: float = 2.0
     tolerance_floor_px: float = 0.2
-    accel_bins: int = 1
+    accel_bins: int = 0
+    accel_relative: float = 0.5
     first_appearance: Literal["ignore", "flag"] = "ignore"
     jitter_compensation: bool = True
+    min_gradient: float = 1.0
+    border_cells: int = 2
     min_neighbours: int = 2
     min_cells: int = 3
 
@@ -136,6 +147,7 @@ def candidate_bits(
     tolerance: np.ndarray,
     still_px: float,
     accel_bins: int,
+    accel_relative: float = 0.0,
 ) -> np.ndarray:
     """Every bit a measurement, widened by its tolerance, could have had before.
 
@@ -144,8 +156,8 @@ def candidate_bits(
     (…) ndarray of uint64
     """
     speed = np.abs(flow_px)
-    lo = np.maximum(speed - tolerance, 0.0)
-    hi = speed + tolerance
+    lo = np.maximum(speed / (1 + accel_relative) - tolerance, 0.0)
+    hi = speed * (1 + accel_relative) + tolerance
     mag_lo = np.maximum(np.searchsorted(MAGNITUDE_EDGES_PX, lo, side="right") - accel_bins, 0)
     mag_hi = np.minimum(
         np.searchsorted(MAGNITUDE_EDGES_PX, hi, side="right") + accel_bins, VALUE_MAGNITUDES - 1
@@ -344,11 +356,17 @@ class AnimateDetector:
             cfg.noise_sigmas * measurement_tolerance(field, cfg.noise_grey, 0.0),
             cfg.tolerance_floor_px,
         )
-        cand = candidate_bits(flow, field.direction_rad, tol, cfg.still_px, cfg.accel_bins)
+        cand = candidate_bits(
+            flow, field.direction_rad, tol, cfg.still_px, cfg.accel_bins, cfg.accel_relative
+        )
         covered = map_ != 0
-        violation = field.valid & covered & ((map_ & cand) == 0)
+        tested = field.valid & (field.gradient >= cfg.min_gradient)
+        b = cfg.border_cells
+        if b > 0:
+            tested[:b], tested[-b:], tested[:, :b], tested[:, -b:] = False, False, False, False
+        violation = tested & covered & ((map_ & cand) == 0)
         if cfg.first_appearance == "flag":
-            violation |= field.valid & ~covered & (np.abs(flow) > cfg.still_px + tol)
+            violation |= tested & ~covered & (np.abs(flow) > cfg.still_px + tol)
         flagged = drop_isolated(violation, cfg.min_neighbours)
         speed = np.abs(flow)
         strength = np.where(flagged, speed / (speed + tol), 0.0).astype(np.float32)

@@ -40,12 +40,15 @@ class CoarseField:
         Share of the region's valid measurements that voted for the winner.
     count : (4, 4) ndarray of int
         Valid measurements per region.
+    inliers : (64, 64) ndarray of bool, optional
+        Cells that voted for their region's winner.
     """
 
     direction_index: np.ndarray
     flow_px: np.ndarray
     support: np.ndarray
     count: np.ndarray
+    inliers: np.ndarray | None = None
 
     @property
     def known(self) -> np.ndarray:
@@ -156,4 +159,11 @@ def coarse_field(
         flow_px=flow.reshape(*shape, 2).astype(np.float32),
         support=support.reshape(shape).astype(np.float32),
         count=count.reshape(shape),
+        inliers=_from_regions(voters & (index != UNKNOWN)[:, None]),
     )
+
+
+def _from_regions(a: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`_by_region`: (16, 256) -> (64, 64)."""
+    s = GRID // REGIONS
+    return a.reshape(REGIONS, REGIONS, s, s).swapaxes(1, 2).reshape(GRID, GRID)

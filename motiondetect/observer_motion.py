@@ -236,6 +236,7 @@ def _speed_range(
     margin: float,
     noise_grey: float = 1.0,
     max_sigma: float = 0.3,
+    cells: np.ndarray | None = None,
 ) -> tuple[float, float] | None:
     """Both ends of ``s`` in ``m = offset.n + s * direction.n`` from the data.
 
@@ -244,7 +245,7 @@ def _speed_range(
     and an estimated error of ``s`` (``noise / (|grad I| |direction . n|)``)
     below ``max_sigma``. Quantiles, not extremes, so that an independent
     mover covering a few percent of the frame cannot stretch the range to
-    include itself.
+    include itself. ``cells`` restricts the estimate to part of the frame.
     """
     nx, ny = field.normal
     proj = direction[..., 0] * nx + direction[..., 1] * ny
@@ -256,6 +257,8 @@ def _speed_range(
         & (np.abs(proj) >= np.cos(np.pi / 4) * length)
         & (sigma <= max_sigma * np.maximum(length, 1e-6))
     )
+    if cells is not None:
+        use &= cells
     if use.sum() < 32:
         return None
     m = field.flow_px.astype(np.float64)
@@ -391,7 +394,14 @@ def constraint_model(
         params["rotation_px"] = [round(float(v), 3) for v in rot]
 
     if fitted:
-        measured = _speed_range(field, direction, offset, quantiles, margin)
+        # The rigid world is what the coarse field sees moving: the cells that
+        # voted for their moving region's dominant flow. A followed subject
+        # (near-zero flow) does not vote for the background's and stays out.
+        size = field.flow_px.shape[0] // REGIONS
+        rigid = np.kron(moving, np.ones((size, size), bool))
+        if coarse.inliers is not None:
+            rigid &= coarse.inliers
+        measured = _speed_range(field, direction, offset, quantiles, margin, cells=rigid)
         if measured is not None:
             # Only the lower end is taken from the data (classes 1-4): a rigid
             # world never moves against the dominant direction (section 3.2),

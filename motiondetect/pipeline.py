@@ -48,6 +48,9 @@ class StageConfig:
     fine_band_px : float
         Largest normal-flow magnitude (work px/frame) trusted at the fine
         level when the pyramid is on.
+    border_cells : int
+        Rings of cells at the frame edge marked invalid: there the blur and
+        derivative kernels reach past the frame and content enters or leaves.
     """
 
     work_size: int = 512
@@ -57,6 +60,7 @@ class StageConfig:
     arithmetic: Literal["float", "lut"] = "float"
     pyramid: bool = True
     fine_band_px: float = 4.0
+    border_cells: int = 1
 
     def __post_init__(self) -> None:
         if self.work_size < stages.MIN_FRAME_SIDE:
@@ -265,6 +269,10 @@ class NormalFlowPipeline:
             gradient = np.where(use, c_grad, gradient)
             valid = valid | use
             level[use] = 1
+        b = cfg.border_cells
+        if b > 0:
+            valid = valid.copy()
+            valid[:b], valid[-b:], valid[:, :b], valid[:, -b:] = False, False, False, False
         return NormalFlowField(
             flow_px=flow.astype(np.float32, copy=False),
             direction_rad=direction.astype(np.float32, copy=False),
