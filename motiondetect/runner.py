@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import logging
+import multiprocessing
 import os
 import shutil
 import time
@@ -468,7 +469,9 @@ def run(
             progress = on_start(job, 0) if on_start else None
             finish(process_input(job, settings, progress))
     else:
-        with ProcessPoolExecutor(max_workers=settings.jobs) as pool:
+        # spawn, not fork: forking after OpenCV's thread pool started can deadlock.
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=settings.jobs, mp_context=context) as pool:
             futures = {pool.submit(_worker, job, settings): job for job in jobs}
             for future in as_completed(futures):
                 job = futures[future]

@@ -131,10 +131,17 @@ def _check_size(width: int, height: int, path: Path) -> None:
         raise VideoError(f"{path}: frames of {width}x{height} are too large to process")
 
 
+_IMAGE_MAGIC = (b"\x89PNG", b"\xff\xd8\xff", b"BM", b"GIF8", b"II*\x00", b"MM\x00*")
+
+
 class _VideoFileSource(FrameSource):
     def __init__(self, path: Path) -> None:
         if path.stat().st_size == 0:
             raise VideoError(f"{path}: file is empty")
+        with open(path, "rb") as fp:
+            head = fp.read(8)
+        if head.startswith(_IMAGE_MAGIC):
+            raise VideoError(f"{path}: a still image, not a video")
         cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
         if not cap.isOpened():
             raise VideoError(f"{path}: not a video OpenCV/FFmpeg can open")

@@ -1,0 +1,143 @@
+"""Bad input gets one clear line or a processed result plus a warning (issue 8)."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from motiondetect_cli.main import main
+
+from motiondetect.video import open_source
+
+from .scenes import scene
+from .test_cli import check_outputs, write_video
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+@pytest.fixture(scope="module")
+def frames():
+    return [fr.image for fr in scene("pan", ("smooth",), frames=16)]
+
+
+def one_failure(result, text):
+    assert result.exit_code == 1
+    assert text in result.output
+    assert "Traceback" not in result.output
+
+
+def test_empty_file(tmp_path):
+    (tmp_path / "empty.mp4").write_bytes(b"")
+    one_failure(run("detect", tmp_path / "empty.mp4", "-o", tmp_path / "o", "-q"), "file is empty")
+
+
+@pytest.mark.parametrize("content", [b"hello, not a video\n" * 50, None])
+def test_text_or_image_named_mp4(tmp_path, content, frames):
+    path = tmp_path / "fake.mp4"
+    if content is None:
+        ok, buf = cv2.imencode(".png", frames[0])
+        content = buf.tobytes()
+    path.write_bytes(content)
+    result = run("detect", path, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 1 and "fake.mp4" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_truncated_video_is_processed_and_marked_partial(tmp_path, frames):
+    full = write_video(tmp_path / "full.avi", frames, "MJPG")
+    data = full.read_bytes()
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(data[: len(data) // 2])
+    result = run("detect", cut, "-o", tmp_path / "o", "--no-video")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "o" / "cut" / "summary.json").read_text())
+    assert summary["status"] == "partial"
+    assert 2 <= summary["totals"]["frames"] < 16
+    assert "truncated" in result.output or "stopped" in result.output
+
+
+def test_one_frame_video(tmp_path, frames):
+    path = write_video(tmp_path / "one.mp4", frames[:1])
+    result = run("detect", path, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 0, result.output
+    check_outputs(tmp_path / "o" / "one", 1)
+
+
+def test_frames_smaller_than_64(tmp_path, frames):
+    path = write_video(tmp_path / "tiny.mp4", [cv2.resize(f, (48, 40)) for f in frames[:4]])
+    one_failure(run("detect", path, "-o", tmp_path / "o", "-q"), "at least 64x64")
+
+
+@pytest.mark.parametrize("size", [(65, 67), (333, 97)])
+def test_odd_frame_sizes(tmp_path, frames, size):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i, f in enumerate(frames[:6]):
+        cv2.imwrite(str(seq / f"{i:03d}.png"), cv2.resize(f, size))
+    assert run("detect", seq, "-o", tmp_path / "o", "-q").exit_code == 0
+    check_outputs(tmp_path / "o" / "seq", 6)
+
+
+@pytest.mark.parametrize("kind", ["grey16", "grey8"])
+def test_16_bit_and_grey_sequences(tmp_path, frames, kind):
+    seq = tmp_path / kind
+    seq.mkdir()
+    for i, f in enumerate(frames[:6]):
+        g = cv2.cvtColor(f, cv2.COLOR_BGR2GRAY)
+        cv2.imwrite(str(seq / f"{i:03d}.png"), g.astype(np.uint16) * 257 if kind == "grey16" else g)
+    assert cv2.imread(str(seq / "000.png"), cv2.IMREAD_UNCHANGED).dtype == (
+        np.uint16 if kind == "grey16" else np.uint8
+    )
+    assert run("detect", seq, "-o", tmp_path / "o", "-q").exit_code == 0
+    check_outputs(tmp_path / "o" / kind, 6)
+
+
+def test_gap_and_stray_file_in_frames_folder(tmp_path, frames, caplog):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for n in (1, 2, 3, 7, 8, 10):
+        cv2.imwrite(str(seq / f"frame_{n}.jpg"), frames[n])
+    (seq / "notes.txt").write_text("stray")
+    with open_source(seq) as source:
+        numbers = [f.number for f in source]
+    assert numbers == [1, 2, 3, 7, 8, 10]  # numeric, not lexicographic, order
+    result = run("detect", seq, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 0
+    check_outputs(tmp_path / "o" / "seq", 6)
+
+
+def test_unicode_and_spaces_in_paths(tmp_path, frames):
+    folder = tmp_path / "vidéos d'été"
+    folder.mkdir()
+    path = write_video(folder / "plage à midi.mp4", frames[:6])
+    out = tmp_path / "sortie ü"
+    assert run("detect", path, "-o", out, "-q").exit_code == 0
+    check_outputs(out / "plage à midi", 6)
+
+
+def test_output_never_inside_an_input(tmp_path, frames):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i, f in enumerate(frames[:4]):
+        cv2.imwrite(str(seq / f"{i}.png"), f)
+    before = sorted(p.name for p in seq.iterdir())
+    result = run("detect", seq, "-o", seq, "-q")
+    one_failure(result, "inside the input")
+    assert sorted(p.name for p in seq.iterdir() if not p.name.startswith(".")) == before
+
+
+def test_interrupted_output_is_not_taken_as_finished(tmp_path, frames):
+    path = write_video(tmp_path / "v.mp4", frames[:8])
+    out = tmp_path / "o"
+    (out / "v").mkdir(parents=True)
+    (out / "v" / "frames.jsonl").write_text('{"frame": 0}\n{"frame": 1, "trunc')  # a kill
+    result = run("detect", path, "-o", out, "-q", "--no-video")
+    assert result.exit_code == 0
+    check_outputs(out / "v", 8, video=False)  # redone, not skipped
+    leftovers = [p.name for p in (out / "v").iterdir() if p.name.startswith(".")]
+    assert leftovers == []

@@ -1,0 +1,352 @@
+"""The command line (issue 5), events/ROI/clips (issue 9), bad input (issue 8)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import jsonschema
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from motiondetect_cli.main import main
+
+from .scenes import scene
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "schemas"
+FRAME_SCHEMA = json.loads((DOCS / "frames.schema.json").read_text())
+SUMMARY_SCHEMA = json.loads((DOCS / "summary.schema.json").read_text())
+
+
+def write_video(path: Path, frames, fourcc: str = "mp4v") -> Path:
+    h, w = frames[0].shape[:2]
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), 30.0, (w, h))
+    assert writer.isOpened()
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    return path
+
+
+@pytest.fixture(scope="session")
+def clip_frames():
+    """16 frames of a panning camera with a smooth mover (exact ground truth)."""
+    return [fr.image for fr in scene("pan", ("smooth",), frames=16)]
+
+
+@pytest.fixture(scope="session")
+def clip(tmp_path_factory, clip_frames) -> Path:
+    return write_video(tmp_path_factory.mktemp("clip") / "pan.mp4", clip_frames)
+
+
+def decode_count(path: Path) -> int:
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n
+
+
+def invoke(*args: str) -> object:
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = True) -> dict:
+    summary = json.loads((out / "summary.json").read_text())
+    jsonschema.validate(summary, SUMMARY_SCHEMA)
+    lines = (out / "frames.jsonl").read_text().splitlines()
+    assert len(lines) == frames == summary["totals"]["frames"]
+    for i, line in enumerate(lines):
+        record = json.loads(line)
+        jsonschema.validate(record, FRAME_SCHEMA)
+        assert record["frame"] == i
+    rows = list(csv.reader((out / "detections.csv").read_text().splitlines()))
+    assert rows[0] == ["frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score"]
+    assert len(rows) - 1 == summary["totals"]["detections"]
+    assert (out / "events.csv").exists()
+    assert (out / "timeline.png").exists() == timeline
+    if video:
+        assert decode_count(out / "annotated.webm") == frames
+    return summary
+
+
+def test_detect_writes_every_output(tmp_path, clip):
+    result = invoke("detect", clip, "-o", tmp_path, "--masks", "-q")
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "pan"
+    summary = check_outputs(out, 16)
+    assert summary["input"]["fps"] == pytest.approx(30.0)
+    assert summary["totals"]["detections"] > 0
+    masks = sorted((out / "masks").glob("*.png"))
+    assert [m.name for m in masks] == [f"{i:06d}.png" for i in range(16)]
+    mask = cv2.imread(str(masks[5]), cv2.IMREAD_UNCHANGED)
+    assert mask.shape == (120 * 2, 160 * 2) and set(np.unique(mask)) <= {0, 255}
+
+
+def test_finished_inputs_are_skipped_unless_overwrite(tmp_path, clip):
+    assert invoke("detect", clip, "-o", tmp_path, "--no-video", "-q").exit_code == 0
+    stamp = (tmp_path / "pan" / "summary.json").stat().st_mtime_ns
+    result = invoke("detect", clip, "-o", tmp_path, "--no-video")
+    assert "skipped" in result.output
+    assert (tmp_path / "pan" / "summary.json").stat().st_mtime_ns == stamp
+    assert invoke("detect", clip, "-o", tmp_path, "--no-video", "--overwrite", "-q").exit_code == 0
+    assert (tmp_path / "pan" / "summary.json").stat().st_mtime_ns != stamp
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        ["--detector", "constraint-ray"],
+        ["--detector", "animate", "--first-appearance", "flag", "--no-jitter-compensation"],
+        ["--work-size", "256", "--arithmetic", "lut", "--no-pyramid"],
+        ["--ego-model", "paper", "--frames-fps", "25"],
+        ["--min-event-frames", "1", "--merge-gap-frames", "0", "--pad-frames", "0"],
+        ["--no-timeline", "-v"],
+    ],
+)
+def test_options_reach_the_settings(tmp_path, clip, options):
+    result = invoke("detect", clip, "-o", tmp_path, "--no-video", "-q", *options)
+    assert result.exit_code == 0, result.output
+    summary = check_outputs(
+        tmp_path / "pan", 16, video=False, timeline="--no-timeline" not in options
+    )
+    settings = summary["settings"]
+    pairs = dict(zip(options[::2], options[1::2]))
+    for flag, value in pairs.items():
+        key = flag.lstrip("-").replace("-", "_")
+        if key in settings and not value.startswith("-"):
+            assert str(settings[key]) == value or float(settings[key]) == float(value)
+    if "--no-timeline" in options:
+        assert not (tmp_path / "pan" / "timeline.png").exists()
+    if "--detector" in pairs:
+        found = {
+            d
+            for line in (tmp_path / "pan" / "frames.jsonl").read_text().splitlines()
+            for det in json.loads(line)["detections"]
+            for d in det["detectors"]
+        }
+        assert found <= {pairs["--detector"]}
+
+
+def test_config_file_sets_the_same_keys(tmp_path, clip):
+    config = tmp_path / "md.toml"
+    config.write_text('detector = "animate"\nwork-size = 320\nvideo = false\n')
+    result = invoke("detect", clip, "-o", tmp_path / "out", "--config", config, "-q")
+    assert result.exit_code == 0, result.output
+    settings = json.loads((tmp_path / "out" / "pan" / "summary.json").read_text())["settings"]
+    assert settings["detector"] == "animate" and settings["work_size"] == 320
+    assert not (tmp_path / "out" / "pan" / "annotated.webm").exists()
+    # The command line wins over the file.
+    result = invoke(
+        "detect", clip, "-o", tmp_path / "o2", "--config", config, "-q", "--detector", "both"
+    )
+    settings = json.loads((tmp_path / "o2" / "pan" / "summary.json").read_text())["settings"]
+    assert settings["detector"] == "both"
+    bad = tmp_path / "bad.toml"
+    bad.write_text("colour = 3\n")
+    result = invoke("detect", clip, "-o", tmp_path / "o3", "--config", bad)
+    assert result.exit_code == 2 and "unknown key 'colour'" in result.output
+
+
+def test_roi_and_min_area_drop_detections(tmp_path, clip):
+    def detections(*extra):
+        out = tmp_path / "-".join(extra or ("plain",)).replace(",", "_")
+        assert invoke("detect", clip, "-o", out, "--no-video", "-q", *extra).exit_code == 0
+        return [
+            d
+            for line in (out / "pan" / "frames.jsonl").read_text().splitlines()
+            for d in json.loads(line)["detections"]
+        ]
+
+    everything = detections()
+    assert everything
+    largest = max(d["area_px"] for d in everything)
+    assert all(d["area_px"] >= largest for d in detections("--min-area", str(largest)))
+    x, y, w, h = everything[0]["bbox"]
+    roi = f"{x},{y},{max(w, 4)},{max(h, 4)}"
+    kept = detections("--roi", roi)
+    assert 0 < len(kept) < len(everything)
+    for d in kept:
+        bx, by, bw, bh = d["bbox"]
+        assert bx < x + max(w, 4) and x < bx + bw and by < y + max(h, 4) and y < by + bh
+    polygon = tmp_path / "roi.txt"
+    polygon.write_text(
+        f"# the same box\n{x},{y} {x + max(w, 4)},{y} {x + max(w, 4)},{y + max(h, 4)} "
+        f"{x},{y + max(h, 4)}\n"
+    )
+    assert len(detections("--roi-file", str(polygon))) == len(kept)
+    assert invoke("detect", clip, "-o", tmp_path, "--roi", "1,2,3").exit_code == 2
+
+
+def test_extract_clips_are_frame_accurate(tmp_path, clip, clip_frames):
+    result = invoke(
+        "detect",
+        clip,
+        "-o",
+        tmp_path,
+        "--no-video",
+        "-q",
+        "--extract-clips",
+        "--min-event-frames",
+        "1",
+        "--pad-frames",
+        "1",
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "pan" / "summary.json").read_text())
+    assert summary["events"]
+    for ev in summary["events"]:
+        path = tmp_path / "pan" / "events" / f"event_{ev['event']:04d}.mp4"
+        assert decode_count(path) == ev["end_frame"] - ev["start_frame"] + 1
+        cap = cv2.VideoCapture(str(path))
+        ok, first = cap.read()
+        cap.release()
+        decoded = cv2.VideoCapture(str(clip))
+        for _ in range(ev["start_frame"] + 1):
+            _, expected = decoded.read()
+        decoded.release()
+        psnr = cv2.PSNR(first, expected)
+        others = [cv2.PSNR(first, f) for i, f in enumerate(clip_frames) if i != ev["start_frame"]]
+        assert psnr > 30 and psnr > max(others)  # the right frame, not a neighbour
+    annotated = invoke(
+        "detect",
+        clip,
+        "-o",
+        tmp_path / "a",
+        "--no-video",
+        "-q",
+        "--extract-clips",
+        "--clips-annotated",
+        "--min-event-frames",
+        "1",
+    )
+    assert annotated.exit_code == 0
+    assert list((tmp_path / "a" / "pan" / "events").glob("event_*.mp4"))
+
+
+def test_batch_with_bad_files(tmp_path, clip_frames):
+    batch = tmp_path / "batch"
+    (batch / "sub").mkdir(parents=True)
+    for name in ("a.mp4", "b.avi", "sub/c.mkv"):
+        fourcc = {".mp4": "mp4v", ".avi": "MJPG", ".mkv": "FFV1"}[Path(name).suffix]
+        write_video(batch / name, clip_frames[:10], fourcc)
+    good = (batch / "a.mp4").read_bytes()
+    (batch / "corrupt.mp4").write_bytes(good[: len(good) // 8] + b"\0" * 500)
+    (batch / "notes.txt").write_text("not a video")
+    out = tmp_path / "out"
+    result = invoke("detect", batch, "-o", out, "--recursive", "--jobs", "2")
+    assert result.exit_code == 1
+    assert "2 of 5 inputs failed" in result.output
+    assert "corrupt.mp4" in result.output and "notes.txt" in result.output
+    assert "Traceback" not in result.output
+    for name in ("a", "b", "sub/c"):
+        check_outputs(out / name, 10)
+    rows = list(csv.reader((out / "events.csv").read_text().splitlines()))
+    assert rows[0][0] == "input"
+    assert (batch / "a.mp4").read_bytes() == good  # inputs are never written to
+
+
+def test_image_sequence_and_lossless_video_give_identical_results(tmp_path, clip_frames):
+    frames_dir = tmp_path / "seq"
+    frames_dir.mkdir()
+    for i, f in enumerate(clip_frames[:10]):
+        cv2.imwrite(str(frames_dir / f"frame_{i + 1}.png"), f)
+    lossless = write_video(tmp_path / "seq.mkv", clip_frames[:10], "FFV1")
+    for src, out in ((frames_dir, "a"), (lossless, "b")):
+        assert invoke("detect", src, "-o", tmp_path / out, "--no-video", "-q").exit_code == 0
+    a = [json.loads(x) for x in (tmp_path / "a" / "seq" / "frames.jsonl").read_text().splitlines()]
+    b = [json.loads(x) for x in (tmp_path / "b" / "seq" / "frames.jsonl").read_text().splitlines()]
+    assert [r["detections"] for r in a] == [r["detections"] for r in b]
+    assert [r["observer_motion"] for r in a] == [r["observer_motion"] for r in b]
+
+
+def test_info_and_version(clip, tmp_path):
+    result = invoke("info", clip)
+    assert result.exit_code == 0
+    assert (
+        "320x240" in result.output
+        and "30.000 fps" in result.output
+        and "16 frames" in result.output
+    )
+    meta = json.loads(invoke("info", clip, "--json").output)
+    assert meta["frame_count"] == 16 and meta["codec"]
+    assert invoke("info", tmp_path / "missing.mp4").exit_code == 1
+    from motiondetect import __version__
+
+    assert __version__ in invoke("--version").output
+
+
+def test_unwritable_output_is_one_clear_line(tmp_path, clip):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = invoke("detect", clip, "-o", blocker / "out")
+    assert result.exit_code == 1
+    assert result.output.count("\n") == 1 and "not writable" in result.output
+
+
+def test_missing_input_fails_cleanly(tmp_path):
+    result = invoke("detect", tmp_path / "nope.mp4", "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 1
+    assert "no such file" in result.output and "Traceback" not in result.output
+
+
+def test_synth_and_evaluate_commands(tmp_path):
+    result = invoke(
+        "synth",
+        tmp_path / "s",
+        "--camera",
+        "uniform",
+        "--mover",
+        "smooth",
+        "--frames",
+        "12",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--supersample",
+        "1",
+    )
+    assert result.exit_code == 0, result.output
+    assert decode_count(tmp_path / "s" / "video.mp4") == 12
+    assert len(list((tmp_path / "s" / "groundtruth").glob("*.png"))) == 12
+    assert (
+        invoke(
+            "detect",
+            tmp_path / "s" / "video.mp4",
+            "-o",
+            tmp_path / "o",
+            "--masks",
+            "--no-video",
+            "-q",
+            "--egomotion",
+            tmp_path / "s" / "scene.json",
+        ).exit_code
+        == 0
+    )
+    result = invoke(
+        "evaluate", tmp_path / "o" / "video", tmp_path / "s", "-o", tmp_path / "table.json"
+    )
+    assert result.exit_code == 0, result.output
+    rows = json.loads((tmp_path / "table.json").read_text())
+    assert rows[0]["frames"] == 10 and rows[0]["object_recall"] >= 0.8
+
+
+def test_installed_entry_point_runs(tmp_path, clip):
+    exe = shutil.which("motiondetect") or str(Path(sys.executable).parent / "motiondetect")
+    proc = subprocess.run(
+        [exe, "detect", str(clip), "-o", str(tmp_path), "-q", "--no-video"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    check_outputs(tmp_path / "pan", 16, video=False)
+    proc = subprocess.run([exe, "detect", "--roi", "x"], capture_output=True, text=True)
+    assert proc.returncode == 2

@@ -1,0 +1,66 @@
+"""evaluate: changedetection.net metrics on tiny hand-made masks (issue 6)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from motiondetect.evaluate import Counts, evaluate_sequence, score_frame
+
+
+def test_metrics_equal_hand_computed_numbers():
+    gt = np.zeros((4, 5), np.uint8)
+    gt[0, :3] = 255  # 3 moving pixels
+    gt[3, 4] = 170  # unknown: not scored
+    pred = np.zeros((4, 5), np.uint8)
+    pred[0, :2] = 255  # 2 TP
+    pred[2, 2] = 255  # 1 FP, an isolated region touching nothing
+    pred[3, 4] = 255  # on an unknown pixel: ignored
+    c = score_frame(pred, gt, min_object_px=1)
+    assert (c.tp, c.fp, c.fn, c.tn) == (2, 1, 1, 15)
+    m = c.metrics()
+    assert m["recall"] == pytest.approx(2 / 3)
+    assert m["precision"] == pytest.approx(2 / 3)
+    assert m["specificity"] == pytest.approx(15 / 16)
+    assert m["fpr"] == pytest.approx(1 / 16)
+    assert m["fnr"] == pytest.approx(1 / 3)
+    assert m["pwc"] == pytest.approx(100 * 2 / 19)
+    assert m["f_measure"] == pytest.approx(2 / 3)
+    assert c.objects == 1 and c.objects_hit == 1
+    assert c.false_alarm_regions == 1  # the unknown-pixel blob touches "unknown": not a false alarm
+
+
+def test_object_recall_needs_ten_percent():
+    gt = np.zeros((20, 20), np.uint8)
+    gt[:10, :10] = 255  # 100 px
+    pred = np.zeros_like(gt)
+    pred[0, :9] = 255  # 9 %
+    assert score_frame(pred, gt).objects_hit == 0
+    pred[1, 0] = 255  # 10 %
+    assert score_frame(pred, gt).objects_hit == 1
+
+
+def write(folder, name, mask):
+    folder.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(folder / name), mask)
+
+
+def test_sequences_align_warm_up_and_temporal_roi(tmp_path):
+    gt_dir, pred_dir = tmp_path / "seq" / "groundtruth", tmp_path / "pred" / "masks"
+    full = np.full((8, 8), 255, np.uint8)
+    for n in range(1, 7):  # UCSD style: gt0001 is frame 0
+        write(gt_dir, f"gt{n:04d}.png", full)
+        write(pred_dir, f"{n - 1:06d}.png", full if n % 2 else np.zeros_like(full))
+    score = evaluate_sequence(tmp_path / "pred", tmp_path / "seq", warmup=2)
+    assert score.counts.frames == 4  # frames 0 and 1 are warm-up
+    assert score.counts.tp == 2 * 64 and score.counts.fn == 2 * 64
+    (tmp_path / "seq" / "temporalROI.txt").write_text("4 5\n")
+    score = evaluate_sequence(tmp_path / "pred", tmp_path / "seq", warmup=0)
+    assert score.counts.frames == 2
+
+
+def test_pooled_counts_add():
+    a, b = Counts(tp=1, fp=2, frames=1), Counts(tp=3, fn=1, frames=2)
+    a.add(b)
+    assert (a.tp, a.fp, a.fn, a.frames) == (4, 2, 1, 3)

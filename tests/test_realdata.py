@@ -1,0 +1,76 @@
+"""Real clips from ../shared/data (skipped when absent): runs complete, outputs valid."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+from motiondetect_cli.main import main
+
+from motiondetect.evaluate import evaluate_sequence
+
+from .conftest import shared_path
+from .test_cli import check_outputs
+
+pytestmark = pytest.mark.realdata
+
+
+def detect(tmp_path, source, *extra):
+    result = CliRunner().invoke(
+        main,
+        [
+            "detect",
+            str(source),
+            "-o",
+            str(tmp_path),
+            "-q",
+            "--no-video",
+            "--masks",
+            *map(str, extra),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    return tmp_path / (source.name if source.is_dir() else source.stem)
+
+
+@pytest.mark.parametrize(
+    ("folder", "frames_dir"),
+    [
+        ("davis/blackswan", "JPEGImages"),
+        ("ucsd/birds", "in"),
+        ("sbi/IBMtest2", "input"),
+    ],
+)
+def test_image_sequences_complete_and_score(tmp_path, folder, frames_dir):
+    root = shared_path(*folder.split("/"))
+    out = detect(tmp_path, root / frames_dir)
+    n = len([p for p in (root / frames_dir).iterdir() if p.suffix.lower() in (".jpg", ".png")])
+    check_outputs(out, n, video=False)
+    score = evaluate_sequence(out, root, warmup=2)
+    assert score.counts.frames >= n - 3
+    assert 0.0 <= score.counts.metrics()["f_measure"] <= 1.0
+
+
+def test_woman_mp4_completes(tmp_path):
+    source = shared_path("woman", "woman.mp4")
+    out = detect(tmp_path, source)
+    summary = check_outputs(out, 479, video=False)
+    assert summary["input"]["width"] == 352 and summary["status"] == "complete"
+
+
+def test_fox_with_known_egomotion(tmp_path):
+    root = shared_path("fox")
+    out = detect(
+        tmp_path,
+        root / "images",
+        "--detector",
+        "constraint-ray",
+        "--egomotion",
+        root / "transforms.json",
+        "--work-size",
+        "384",
+    )
+    records = [json.loads(x) for x in (out / "frames.jsonl").read_text().splitlines()]
+    known = [r for r in records if r["observer_motion"]["name"] == "known-egomotion"]
+    assert len(known) >= 45  # every frame whose predecessor has a pose
