@@ -296,7 +296,7 @@ def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
     return out
 
 
-def global_flow(field: NormalFlowField, iterations: int = 3) -> np.ndarray:
+def global_flow(field: NormalFlowField, iterations: int = 2) -> np.ndarray:
     """Robust least-squares uniform flow (vx, vy) explaining the normal flow."""
     nx, ny = field.normal
     v = field.valid

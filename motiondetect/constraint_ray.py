@@ -134,8 +134,8 @@ def direction_bin(theta: np.ndarray) -> np.ndarray:
     return np.minimum((theta * (DIRECTION_BINS / np.pi)).astype(np.intp), DIRECTION_BINS - 1)
 
 
-def filter_image(model: ObserverMotion) -> np.ndarray:
-    """Encode a constraint model as a (64, 64, 16) uint32 filter image.
+def filter_bits(model: ObserverMotion, bins: np.ndarray) -> np.ndarray:
+    """The filter image at one direction bin per cell: (64, 64) uint32.
 
     Bin ``b`` holds the allowed normal-flow bins for gradient directions in
     ``[b, b + 1) * pi / 16``: the union of the intervals at the bin's two
@@ -145,22 +145,31 @@ def filter_image(model: ObserverMotion) -> np.ndarray:
     step = np.pi / DIRECTION_BINS
     lo = hi = None
     for offset in (0.0, 0.5, 1.0):
-        theta = (np.arange(DIRECTION_BINS) + offset) * step
-        nx, ny = np.cos(theta), np.sin(theta)
+        theta = (bins + offset) * step
         a, b = allowed_interval(
-            model.rotation_px[:, :, None, :],
-            model.translation_px[:, :, None, :],
+            model.rotation_px,
+            model.translation_px,
             model.depth_bound,
-            nx,
-            ny,
+            np.cos(theta),
+            np.sin(theta),
         )
         lo = a if lo is None else np.minimum(lo, a)
         hi = b if hi is None else np.maximum(hi, b)
     return encode_interval(lo, hi)
 
 
+def filter_image(model: ObserverMotion) -> np.ndarray:
+    """The whole filter image: (64, 64, 16) uint32, one mask per direction bin.
+
+    The detector only reads each cell's measured bin (:func:`filter_bits`);
+    this materialises all of them, for inspection and figures.
+    """
+    shape = model.rotation_px.shape[:2]
+    return np.stack([filter_bits(model, np.full(shape, b)) for b in range(DIRECTION_BINS)], axis=-1)
+
+
 def check_measurements(
-    filt: np.ndarray, field: NormalFlowField, tolerance: np.ndarray
+    model: ObserverMotion, field: NormalFlowField, tolerance: np.ndarray
 ) -> np.ndarray:
     """Cells whose measured normal flow shares no bit with the filter image.
 
@@ -169,8 +178,7 @@ def check_measurements(
     flagged : (64, 64) ndarray of bool
     """
     theta, m = fold_direction(field.direction_rad, field.flow_px)
-    bins = direction_bin(theta)
-    allowed = np.take_along_axis(filt, bins[..., None], axis=2)[..., 0]
+    allowed = filter_bits(model, direction_bin(theta))
     measured = encode_interval(m - tolerance, m + tolerance)
     return field.valid & ((allowed & measured) == 0)
 
@@ -289,7 +297,7 @@ class ConstraintRayDetector:
         tol = cfg.noise_sigmas * measurement_tolerance(
             field, cfg.noise_grey, cfg.tolerance_floor_px / cfg.noise_sigmas
         ) + cfg.tolerance_relative * np.abs(field.flow_px)
-        flagged = check_measurements(filter_image(observer), field, tol)
+        flagged = check_measurements(observer, field, tol)
         flagged = drop_isolated(flagged, cfg.min_neighbours)
         nx, ny = field.normal
         lo, hi = allowed_interval(

@@ -21,7 +21,7 @@ REGIONS = 4
 DIRECTIONS = 8
 UNKNOWN, STILL = -1, DIRECTIONS  # codes in CoarseField.direction_index
 
-_HOUGH_DIRECTIONS = 32
+_HOUGH_DIRECTIONS = 16
 _HOUGH_SPEEDS_PX = np.array([0.3, 0.5, 0.8, 1.2, 1.8, 2.7, 4.0, 6.0, 9.0, 13.0], np.float32)
 
 
@@ -63,6 +63,7 @@ def _candidates() -> np.ndarray:
     angles = np.arange(_HOUGH_DIRECTIONS) * (2 * np.pi / _HOUGH_DIRECTIONS)
     unit = np.stack([np.cos(angles), np.sin(angles)], axis=1)
     moving = (unit[None, :, :] * _HOUGH_SPEEDS_PX[:, None, None]).reshape(-1, 2)
+    # Refinement by least squares recovers directions between these steps.
     return np.vstack([np.zeros((1, 2)), moving]).astype(np.float32)
 
 
@@ -120,11 +121,13 @@ def coarse_field(
     n = np.stack([_by_region(nx), _by_region(ny)])  # (2, 16, 256)
     tol = _by_region(measurement_tolerance(field, noise_grey, floor_px))
     cand = _CANDIDATES  # (C, 2)
-    speed = np.hypot(cand[:, 0], cand[:, 1])
-    pred = np.einsum("cd,drp->crp", cand, n)  # (C, 16, 256)
-    within = np.abs(pred - m[None]) <= tol[None] + relative * speed[:, None, None]
-    within &= valid[None]
-    votes = within.sum(axis=2)  # (C, 16)
+    speed = np.hypot(cand[:, 0], cand[:, 1]).astype(np.float32)
+    pred = (cand @ n.reshape(2, -1)).reshape(len(cand), *m.shape)  # (C, 16, 256)
+    pred -= m[None]
+    np.abs(pred, out=pred)
+    pred -= relative * speed[:, None, None]
+    within = pred <= np.where(valid, tol, -np.inf).astype(np.float32)[None]
+    votes = np.count_nonzero(within, axis=2)  # (C, 16)
     best = votes.argmax(axis=0)  # (16,)
     count = valid.sum(axis=1)
     region = np.arange(REGIONS * REGIONS)

@@ -164,6 +164,17 @@ def canonical_library(geometry: GridGeometry) -> tuple[CanonicalMotion, ...]:
     return tuple(lib)
 
 
+@lru_cache(maxsize=16)
+def _library_features(geometry: GridGeometry) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked features of every library entry (class 5 has no first-order part)."""
+    firsts, seconds = [], []
+    for entry in canonical_library(geometry):
+        t1, t2 = _features(np.asarray(entry.template, float))
+        firsts.append(np.zeros_like(t1) if entry.axial else t1)
+        seconds.append(t2)
+    return np.stack(firsts), np.stack(seconds)
+
+
 def _features(units: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """First-order (cos, sin) and doubled-angle (cos 2t, sin 2t) features."""
     x, y = units[..., 0], units[..., 1]
@@ -206,15 +217,11 @@ def classify(
     if n_still >= static_fraction * n_known:
         return None, 0, coverage * n_still / n_known
     first, second = _features(observed_units(coarse))
-    best, best_d = None, np.inf
-    for entry in canonical_library(geometry):
-        t1, t2 = _features(entry.template)
-        if entry.axial:
-            t1 = np.zeros_like(t1)
-        d = ((first - t1) ** 2).sum(-1) + ((second - t2) ** 2).sum(-1)
-        dist = float(d[known].mean())
-        if dist < best_d:
-            best, best_d = entry, dist
+    t1, t2 = _library_features(geometry)  # (L, 4, 4, 2) each
+    d = ((first - t1) ** 2).sum(-1) + ((second - t2) ** 2).sum(-1)  # (L, 4, 4)
+    dist = d[:, known].mean(axis=1)
+    pick = int(np.argmin(dist))
+    best, best_d = canonical_library(geometry)[pick], float(dist[pick])
     return best, best.class_id, coverage * max(0.0, 1.0 - best_d / 2.0)
 
 

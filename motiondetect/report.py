@@ -89,6 +89,9 @@ class DetectionsCsvWriter:
                 f"{detection['score']:.4f}",
             ]
         )
+
+    def flush(self) -> None:
+        """Called once per frame, after its rows."""
         self.fp.flush()
 
 

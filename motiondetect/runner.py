@@ -311,6 +311,7 @@ def _process(
                 frames_out.append(record)
                 for det in record["detections"]:
                     csv_out.append(result.index, result.time_s, det)
+                csv_out.flush()
                 n_detections += len(record["detections"])
                 timeline.add(
                     result.time_s,

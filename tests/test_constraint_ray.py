@@ -70,6 +70,7 @@ def test_bit_test_agrees_with_the_exact_interval():
 
     model = ObserverMotion(1, {}, 1.0, vw, vxy, 3.0)
     filt = cr.filter_image(model)
+    assert filt.shape == (64, 64, 16)
     theta = RNG.uniform(-np.pi, np.pi, (64, 64)).astype(np.float32)
     m = RNG.uniform(-6, 6, (64, 64)).astype(np.float32)
     field = NormalFlowField(
@@ -81,7 +82,12 @@ def test_bit_test_agrees_with_the_exact_interval():
         GridGeometry((512, 512), (512, 512)),
     )
     tol = np.full((64, 64), 0.05, np.float32)
-    flagged = cr.check_measurements(filt, field, tol)
+    flagged = cr.check_measurements(model, field, tol)
+    folded, mf = cr.fold_direction(theta, m)
+    bins = cr.direction_bin(folded)
+    allowed = np.take_along_axis(filt, bins[..., None], axis=2)[..., 0]
+    from_image = field.valid & ((allowed & cr.encode_interval(mf - tol, mf + tol)) == 0)
+    np.testing.assert_array_equal(flagged, from_image)  # the image and the per-cell path agree
     lo, hi = cr.allowed_interval(vw, vxy, 3.0, np.cos(theta), np.sin(theta))
     outside = (m + 1.0 < lo) | (m - 1.0 > hi)  # clearly outside: must be flagged
     inside = (m >= lo) & (m <= hi)  # inside: must never be flagged

@@ -1,0 +1,87 @@
+"""Shared helpers for the benchmark scripts (not part of the package)."""
+
+from __future__ import annotations
+
+import os
+import resource
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+from skimage import data
+
+
+def single_thread() -> None:
+    """One core: OpenCV and BLAS both limited to one thread."""
+    os.environ["OMP_NUM_THREADS"] = "1"
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    cv2.setNumThreads(1)
+
+
+def make_pan_clip(
+    path: Path, size: tuple[int, int], frames: int, fps: float = 30.0, speed_px: float = 3.0
+) -> Path:
+    """A real photograph panned across at ``speed_px`` per frame, written as MPEG-4."""
+    w, h = size
+    photo = np.concatenate([data.astronaut(), data.astronaut()[:, ::-1]], axis=1)
+    scale = max((h + 8) / photo.shape[0], (w + speed_px * frames + 8) / photo.shape[1])
+    big = cv2.resize(photo[..., ::-1], None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, (w, h))
+    for i in range(frames):
+        x = speed_px * i
+        m = np.float32([[1, 0, -x], [0, 1, 0]])
+        frame = cv2.warpAffine(big, m, (w, h), flags=cv2.INTER_LINEAR)
+        writer.write(frame)
+    writer.release()
+    return path
+
+
+def read_all(path: Path) -> list[np.ndarray]:
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        frames.append(f)
+    cap.release()
+    return frames
+
+
+def timed(fn, repeat: int = 1) -> float:
+    """Best wall time of ``repeat`` runs, seconds."""
+    best = float("inf")
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def decode_only(path: Path) -> int:
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n
+
+
+def mog2_on(path: Path) -> int:
+    """OpenCV MOG2 per frame, as DVR-Scan uses it (decode included)."""
+    sub = cv2.createBackgroundSubtractorMOG2()
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        sub.apply(f)
+        n += 1
+    cap.release()
+    return n
+
+
+def peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

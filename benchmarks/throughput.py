@@ -1,0 +1,186 @@
+"""End-to-end throughput, memory and batch scaling (issue 7).
+
+    python benchmarks/throughput.py                 # speed, 512x512 and 1920x1080
+    python benchmarks/throughput.py --memory        # peak RSS, long vs short 1080p video
+    python benchmarks/throughput.py --batch         # --jobs 2 against --jobs 1
+
+Speed: ``detect`` end to end (decode included) in several variants, and in
+the same run on the same file decode-only and OpenCV MOG2 per frame. Each
+variant runs once with one thread (``cv2.setNumThreads(1)``,
+``OMP_NUM_THREADS=1``) and once with OpenCV's default threads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from common import decode_only, make_pan_clip, mog2_on  # noqa: E402
+
+from motiondetect.pipeline import NormalFlowPipeline  # noqa: E402
+from motiondetect.runner import InputJob, process_input  # noqa: E402
+from motiondetect.settings import make_settings  # noqa: E402
+from motiondetect.video import open_source  # noqa: E402
+
+VARIANTS = {
+    "detect both, reports, no video": dict(detector="both", video=False, timeline=False),
+    "detect both, reports + annotated video": dict(detector="both", video=True, timeline=False),
+    "detect constraint-ray only": dict(detector="constraint-ray", video=False, timeline=False),
+    "detect animate only": dict(detector="animate", video=False, timeline=False),
+}
+
+
+def stages_only(path: Path) -> int:
+    pipe = NormalFlowPipeline()
+    n = 0
+    with open_source(path) as source:
+        for frame in source:
+            pipe.process(frame.image)
+            n += 1
+    return n
+
+
+def run_detect(path: Path, out: Path, **options) -> int:
+    settings = make_settings({"output": out, "overwrite": True, **options})
+    result = process_input(InputJob(path, path.stem), settings)
+    assert result.status == "done", result.message
+    return result.summary["totals"]["frames"]
+
+
+def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
+    rows = []
+
+    def best(fn) -> float:
+        times = []
+        n = 0
+        for _ in range(repeat):
+            t = time.perf_counter()
+            n = fn()
+            times.append(time.perf_counter() - t)
+        return n / min(times)
+
+    rows.append(("decode only", best(lambda: decode_only(clip))))
+    rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
+    rows.append(("stage pipeline only (decode + stages)", best(lambda: stages_only(clip))))
+    for name, options in VARIANTS.items():
+        rows.append((name, best(lambda o=options: run_detect(clip, tmp / "out", **o))))
+    return rows
+
+
+def print_rows(title: str, rows: list[tuple[str, float]]) -> None:
+    mog = dict(rows)["OpenCV MOG2 (decode + apply)"]
+    print(f"\n{title}")
+    print(f"  {'':42s} {'frames/s':>9s} {'x MOG2':>7s} {'x 30 Hz':>8s}")
+    for name, fps in rows:
+        print(f"  {name:42s} {fps:9.1f} {fps / mog:7.2f} {fps / 30:8.1f}")
+
+
+def memory(tmp: Path, long_s: float, short_s: float) -> None:
+    """Peak RSS of detect on a long and a short 1080p video, in fresh processes."""
+    code = (
+        "import resource,sys;from pathlib import Path;"
+        "from motiondetect.runner import InputJob, process_input;"
+        "from motiondetect.settings import make_settings;"
+        "p=Path(sys.argv[1]);s=make_settings({'output':sys.argv[2],'overwrite':True});"
+        "r=process_input(InputJob(p,p.stem),s);assert r.status=='done',r.message;"
+        "print(r.summary['totals']['frames'],resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)"
+    )
+    results = {}
+    for label, seconds in (("short", short_s), ("long", long_s)):
+        clip = make_pan_clip(tmp / f"{label}.mp4", (1920, 1080), int(30 * seconds), speed_px=2.0)
+        proc = subprocess.run(
+            [sys.executable, "-c", code, str(clip), str(tmp / label)],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        frames, rss_kb = proc.stdout.split()
+        results[label] = (int(frames), int(rss_kb) / 1024)
+        clip.unlink()
+    (fs, rs), (fl, rl) = results["short"], results["long"]
+    print("\npeak RSS, 1080p, detect with annotated video and reports:")
+    print(f"  short: {fs} frames ({short_s:.0f} s): {rs:.0f} MB")
+    print(f"  long:  {fl} frames ({long_s:.0f} s): {rl:.0f} MB")
+    print(f"  ratio long/short: {rl / rs:.3f}")
+
+
+def batch(tmp: Path, videos: int, frames: int) -> None:
+    folder = tmp / "batch"
+    folder.mkdir()
+    for i in range(videos):
+        make_pan_clip(folder / f"v{i}.mp4", (512, 512), frames, speed_px=2.0 + 0.5 * i)
+    times = {}
+    for jobs in (1, 2):
+        out = tmp / f"out{jobs}"
+        t = time.perf_counter()
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "motiondetect_cli.main",
+                "detect",
+                str(folder),
+                "-o",
+                str(out),
+                "-q",
+                "--jobs",
+                str(jobs),
+                "--no-video",
+            ],
+            check=True,
+        )
+        times[jobs] = time.perf_counter() - t
+    print(f"\nbatch of {videos} videos x {frames} frames (512x512):")
+    print(
+        f"  --jobs 1: {times[1]:.2f} s   --jobs 2: {times[2]:.2f} s   "
+        f"speed-up {times[1] / times[2]:.2f}x"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--repeat", type=int, default=2)
+    parser.add_argument("--memory", action="store_true")
+    parser.add_argument("--long-s", type=float, default=600.0)
+    parser.add_argument("--short-s", type=float, default=10.0)
+    parser.add_argument("--batch", action="store_true")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        if args.memory:
+            memory(tmp, args.long_s, args.short_s)
+            return
+        if args.batch:
+            batch(tmp, videos=4, frames=args.frames)
+            return
+        for size in ((512, 512), (1920, 1080)):
+            clip = make_pan_clip(tmp / f"clip{size[0]}.mp4", size, args.frames)
+            for threads in ("one thread", "default threads"):
+                if threads == "one thread":
+                    os.environ["OMP_NUM_THREADS"] = "1"
+                    cv2.setNumThreads(1)
+                else:
+                    cv2.setNumThreads(-1)
+                rows = speed(clip, tmp, args.repeat)
+                print_rows(
+                    f"{size[0]}x{size[1]}, {args.frames} frames, {threads} "
+                    f"(cv2 threads = {cv2.getNumThreads()})",
+                    rows,
+                )
+
+
+if __name__ == "__main__":
+    main()
