@@ -25,11 +25,13 @@ def make_pan_clip(
     """A real photograph panned across at ``speed_px`` per frame, written as MPEG-4."""
     w, h = size
     photo = np.concatenate([data.astronaut(), data.astronaut()[:, ::-1]], axis=1)
-    scale = max((h + 8) / photo.shape[0], (w + speed_px * frames + 8) / photo.shape[1])
+    travel = min(speed_px * frames, 600.0)  # pans back and forth beyond this
+    scale = max((h + 8) / photo.shape[0], (w + travel + 8) / photo.shape[1])
     big = cv2.resize(photo[..., ::-1], None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, (w, h))
     for i in range(frames):
-        x = speed_px * i
+        x = speed_px * i % (2 * travel) if travel > 0 else 0.0
+        x = x if x <= travel else 2 * travel - x
         m = np.float32([[1, 0, -x], [0, 1, 0]])
         frame = cv2.warpAffine(big, m, (w, h), flags=cv2.INTER_LINEAR)
         writer.write(frame)

@@ -100,8 +100,9 @@ class Ours:
         res = self.md.process(frame, self.index, 0.0)
         self.index += 1
         h, w = frame.shape[:2]
-        return cv2.resize(res.flagged.astype(np.uint8) * 255, (w, h),
-                          interpolation=cv2.INTER_NEAREST)
+        return cv2.resize(
+            res.flagged.astype(np.uint8) * 255, (w, h), interpolation=cv2.INTER_NEAREST
+        )
 
 
 def sequences(quick: bool) -> list[tuple[str, Path, Path | None, Path | None]]:
@@ -109,8 +110,9 @@ def sequences(quick: bool) -> list[tuple[str, Path, Path | None, Path | None]]:
     out = []
     for folder in sorted((ROOT / "sample_videos").iterdir()):
         if (folder / "video.mp4").exists():
-            out.append((f"sample/{folder.name}", folder / "video.mp4", folder,
-                        folder / "scene.json"))
+            out.append(
+                (f"sample/{folder.name}", folder / "video.mp4", folder, folder / "scene.json")
+            )
     if quick or not SHARED.exists():
         return out
     for seq in sorted((SHARED / "davis").glob("*/JPEGImages")):
@@ -120,8 +122,9 @@ def sequences(quick: bool) -> list[tuple[str, Path, Path | None, Path | None]]:
     for seq in sorted((SHARED / "sbi").glob("*/input")):
         out.append((f"sbi/{seq.parent.name}", seq, seq.parent / "groundtruth", None))
     if (SHARED / "fox" / "images").exists():
-        out.append(("fox (no mover)", SHARED / "fox" / "images", None,
-                    SHARED / "fox" / "transforms.json"))
+        out.append(
+            ("fox (no mover)", SHARED / "fox" / "images", None, SHARED / "fox" / "transforms.json")
+        )
     return out
 
 
@@ -131,8 +134,10 @@ def gt_masks(gt: Path | None) -> dict[int, Path]:
     folder = find_gt_folder(gt)
     import re
 
-    files = sorted((p for p in folder.iterdir() if p.suffix.lower() == ".png"),
-                   key=lambda p: int(re.findall(r"\d+", p.stem)[-1]))
+    files = sorted(
+        (p for p in folder.iterdir() if p.suffix.lower() == ".png"),
+        key=lambda p: int(re.findall(r"\d+", p.stem)[-1]),
+    )
     first = int(re.findall(r"\d+", files[0].stem)[-1])
     return {int(re.findall(r"\d+", p.stem)[-1]) - first: p for p in files}
 
@@ -165,8 +170,9 @@ def fmt(v, digits=2):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results.md")
     args = parser.parse_args()
@@ -174,15 +180,26 @@ def main() -> None:
     rows = []
     pooled: dict[str, Counts] = {}
     for name, source, gt, ego_file in sequences(args.quick):
-        methods = [FrameDiff(), Mog2(), HomographyDiff(), Ours("both"),
-                   Ours("constraint-ray"), Ours("animate")]
+        methods = [
+            FrameDiff(),
+            Mog2(),
+            HomographyDiff(),
+            Ours("both"),
+            Ours("constraint-ray"),
+            Ours("animate"),
+        ]
         if ego_file is not None:
             numbers = None
             if source.is_dir():
                 with open_source(source) as src:
                     numbers = src.frame_numbers
-            methods.append(Ours("constraint-ray", EgoMotion.load(ego_file, numbers),
-                                "motiondetect known ego-motion"))
+            methods.append(
+                Ours(
+                    "constraint-ray",
+                    EgoMotion.load(ego_file, numbers),
+                    "motiondetect known ego-motion",
+                )
+            )
         t0 = time.perf_counter()
         result = run_sequence(source, gt, methods)
         print(f"{name}: {time.perf_counter() - t0:.1f} s", flush=True)
@@ -209,18 +226,26 @@ def main() -> None:
     for key, counts in pooled.items():
         group, method = key.split("|")
         m = counts.metrics()
-        lines.append(f"| {group} | {method} | {fmt(m['precision'])} | {fmt(m['recall'])} | "
-                     f"{fmt(m['f_measure'])} | {fmt(m['object_recall'])} | "
-                     f"{fmt(m['false_alarm_regions_per_frame'])} | {m['frames']} |")
-    lines += ["", "## Per sequence", "",
-              "| sequence | method | precision | recall | F | obj. recall | FA/frame | frames/s |",
-              "|---|---|---|---|---|---|---|---|"]
+        lines.append(
+            f"| {group} | {method} | {fmt(m['precision'])} | {fmt(m['recall'])} | "
+            f"{fmt(m['f_measure'])} | {fmt(m['object_recall'])} | "
+            f"{fmt(m['false_alarm_regions_per_frame'])} | {m['frames']} |"
+        )
+    lines += [
+        "",
+        "## Per sequence",
+        "",
+        "| sequence | method | precision | recall | F | obj. recall | FA/frame | frames/s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for name, method, m, fps in rows:
-        lines.append(f"| {name} | {method} | {fmt(m['precision'])} | {fmt(m['recall'])} | "
-                     f"{fmt(m['f_measure'])} | {fmt(m['object_recall'])} | "
-                     f"{fmt(m['false_alarm_regions_per_frame'])} | {fps:.0f} |")
+        lines.append(
+            f"| {name} | {method} | {fmt(m['precision'])} | {fmt(m['recall'])} | "
+            f"{fmt(m['f_measure'])} | {fmt(m['object_recall'])} | "
+            f"{fmt(m['false_alarm_regions_per_frame'])} | {fps:.0f} |"
+        )
     args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    print("\n".join(lines[10:10 + 3 + len(pooled)]))
+    print("\n".join(lines[10 : 10 + 3 + len(pooled)]))
 
 
 if __name__ == "__main__":

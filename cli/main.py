@@ -84,6 +84,12 @@ def _d(key: str) -> str:
     type=click.Choice(["constraint-ray", "animate", "both"]),
     help=f"Which detector {_d('detector')}.",
 )
+@click.option(
+    "--persistence",
+    type=click.IntRange(1, 30),
+    help="Report a region only if it overlaps flagged cells in each of the previous "
+    f"N-1 frames; 1 is the detectors' raw output {_d('persistence')}.",
+)
 @click.option("--masks/--no-masks", default=None, help="Write masks/NNNNNN.png (0/255).")
 @click.option("--video/--no-video", default=None, help="Write annotated.webm (default: on).")
 @click.option(

@@ -53,8 +53,16 @@ def normal_flow_figure(frames: list[np.ndarray], title: str) -> np.ndarray:
             colour = (80, 220, 255) if field.level[r, c] == 0 else (255, 160, 60)
             cv2.arrowedLine(img, p0, p1, colour, 1, cv2.LINE_AA, tipLength=0.3)
     cv2.putText(img, title, (8, 20), FONT, 0.55, (255, 255, 255), 1, cv2.LINE_AA)
-    cv2.putText(img, "normal flow m*n x3 (yellow fine level, blue coarse level)",
-                (8, size[1] - 10), FONT, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+    cv2.putText(
+        img,
+        "normal flow m*n x3 (yellow fine level, blue coarse level)",
+        (8, size[1] - 10),
+        FONT,
+        0.45,
+        (255, 255, 255),
+        1,
+        cv2.LINE_AA,
+    )
     return img
 
 
@@ -64,13 +72,12 @@ def constraint_regions_figure() -> np.ndarray:
     cases = [
         ("segment, bounded depth", np.array([1.0, -0.5]), np.array([1.0, 1.5]), 1.0),
         ("segment away from origin", np.array([1.5, 0.8]), np.array([0.8, -0.6]), 1.5),
-        ("a -> infinity: disk + half-plane", np.array([0.8, 0.6]), np.array([1.0, 0.3]),
-         UNBOUNDED),
+        ("a -> infinity: disk + half-plane", np.array([0.8, 0.6]), np.array([1.0, 0.3]), UNBOUNDED),
     ]
     n = 300
     extent = 3.0
     for title, vw, vxy, a in cases:
-        ys, xs = np.mgrid[extent:-extent:n * 1j, -extent:extent:n * 1j]
+        ys, xs = np.mgrid[extent : -extent : n * 1j, -extent : extent : n * 1j]
         r = np.hypot(xs, ys)
         nx, ny = xs / np.maximum(r, 1e-9), ys / np.maximum(r, 1e-9)
         lo, hi = allowed_interval(vw, vxy, a, nx, ny)
@@ -79,7 +86,10 @@ def constraint_regions_figure() -> np.ndarray:
         img[allowed] = (230, 190, 140)
 
         def px(v):
-            return (int((v[0] + extent) / (2 * extent) * n), int((extent - v[1]) / (2 * extent) * n))
+            return (
+                int((v[0] + extent) / (2 * extent) * n),
+                int((extent - v[1]) / (2 * extent) * n),
+            )
 
         cv2.line(img, (0, n // 2), (n, n // 2), (150, 150, 150), 1)
         cv2.line(img, (n // 2, 0), (n // 2, n), (150, 150, 150), 1)
@@ -112,8 +122,10 @@ def footprints_figure() -> np.ndarray:
             cv2.line(img, (k * cell, 0), (k * cell, img.shape[0]), (220, 220, 220), 1)
             cv2.line(img, (0, k * cell), (img.shape[1], k * cell), (220, 220, 220), 1)
         c = (r * cell + cell // 2, r * cell + cell // 2)
-        tip = (int(c[0] + 12 / 8 * cell * np.cos(np.deg2rad(30))),
-               int(c[1] + 12 / 8 * cell * np.sin(np.deg2rad(30))))
+        tip = (
+            int(c[0] + 12 / 8 * cell * np.cos(np.deg2rad(30))),
+            int(c[1] + 12 / 8 * cell * np.sin(np.deg2rad(30))),
+        )
         cv2.circle(img, c, 5, (0, 0, 0), -1)
         cv2.arrowedLine(img, c, tip, (0, 0, 200), 2, cv2.LINE_AA, tipLength=0.25)
         cv2.putText(img, title, (4, 14), FONT, 0.42, (0, 0, 0), 1, cv2.LINE_AA)
@@ -132,8 +144,7 @@ def first_frames(path: Path, count: int, skip: int = 0) -> list[np.ndarray]:
     return out
 
 
-def detection_figure(path: Path, at: int, detector: str = "both",
-                     egomotion=None) -> np.ndarray:
+def detection_figure(path: Path, at: int, detector: str = "both", egomotion=None) -> np.ndarray:
     md = MotionDetector(detector, egomotion=egomotion)
     with open_source(path) as source:
         for frame in source:
@@ -154,8 +165,9 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     if args.clip is not None:
         frames = first_frames(args.clip, 2, skip=args.frame - 1)
-        cv2.imwrite(str(args.out / "clip_normal_flow.png"),
-                    normal_flow_figure(frames, args.clip.name))
+        cv2.imwrite(
+            str(args.out / "clip_normal_flow.png"), normal_flow_figure(frames, args.clip.name)
+        )
         cv2.imwrite(str(args.out / "clip_detection.png"), detection_figure(args.clip, args.frame))
         return
     photo = data.astronaut()
@@ -163,21 +175,32 @@ def main() -> None:
     pair = []
     for sign in (-1, 1):
         m = cv2.getRotationMatrix2D((w / 2, h / 2), sign * 0.75, 1.0 + sign * 0.006)
-        pair.append(cv2.warpAffine(photo[..., ::-1], m, (w, h), flags=cv2.INTER_CUBIC,
-                                   borderMode=cv2.BORDER_REFLECT))
-    cv2.imwrite(str(args.out / "normal_flow_rotation_zoom.png"),
-                normal_flow_figure(pair, "photograph rotating 1.5 deg and zooming 1.2 %/frame"))
+        pair.append(
+            cv2.warpAffine(
+                photo[..., ::-1], m, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT
+            )
+        )
+    cv2.imwrite(
+        str(args.out / "normal_flow_rotation_zoom.png"),
+        normal_flow_figure(pair, "photograph rotating 1.5 deg and zooming 1.2 %/frame"),
+    )
     samples = ROOT / "sample_videos"
     clip = samples / "uniform_mixed" / "video.mp4"
-    cv2.imwrite(str(args.out / "normal_flow_sample.png"),
-                normal_flow_figure(first_frames(clip, 2, skip=19), "uniform_mixed, frame 20"))
+    cv2.imwrite(
+        str(args.out / "normal_flow_sample.png"),
+        normal_flow_figure(first_frames(clip, 2, skip=19), "uniform_mixed, frame 20"),
+    )
     cv2.imwrite(str(args.out / "constraint_regions.png"), constraint_regions_figure())
     cv2.imwrite(str(args.out / "footprints.png"), footprints_figure())
     cv2.imwrite(str(args.out / "detection_uniform_mixed.png"), detection_figure(clip, 21))
-    cv2.imwrite(str(args.out / "coarse_field_forward.png"),
-                detection_figure(samples / "forward_crossing" / "video.mp4", 30, "constraint-ray"))
-    cv2.imwrite(str(args.out / "detection_handheld_animate.png"),
-                detection_figure(samples / "handheld_emerging" / "video.mp4", 25, "animate"))
+    cv2.imwrite(
+        str(args.out / "coarse_field_forward.png"),
+        detection_figure(samples / "forward_crossing" / "video.mp4", 30, "constraint-ray"),
+    )
+    cv2.imwrite(
+        str(args.out / "detection_handheld_animate.png"),
+        detection_figure(samples / "handheld_emerging" / "video.mp4", 25, "animate"),
+    )
 
 
 if __name__ == "__main__":

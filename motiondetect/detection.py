@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from .animate import AnimateConfig, AnimateDetector
@@ -17,7 +18,9 @@ from .constraint_ray import ConstraintRayConfig, ConstraintRayDetector, Detector
 from .hough import CoarseField
 from .observer_motion import ObserverMotion
 from .pipeline import GridGeometry, NormalFlowField, NormalFlowPipeline, StageConfig
-from .regions import Region, drop_isolated, find_regions
+from .regions import Region, drop_isolated, find_regions, regions_mask
+
+_GROW = np.ones((3, 3), np.uint8)
 
 DETECTORS = {
     "constraint-ray": ("constraint-ray",),
@@ -93,7 +96,12 @@ class MotionDetector:
         constraint_ray: ConstraintRayConfig | None = None,
         animate: AnimateConfig | None = None,
         egomotion=None,
+        persistence: int = 2,
     ) -> None:
+        if persistence < 1:
+            raise ValueError(f"persistence must be at least 1, but got {persistence}")
+        self.persistence = persistence
+        self._recent: list[np.ndarray] = []
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {sorted(DETECTORS)}, but got {detector!r}")
         self.pipeline = NormalFlowPipeline(stages)
@@ -108,6 +116,21 @@ class MotionDetector:
             (animate or AnimateConfig()).min_cells,
         )
 
+    def _persistent(
+        self, flagged: np.ndarray, regions: list[Region]
+    ) -> tuple[np.ndarray, list[Region]]:
+        """Keep regions whose cells (grown by one) touched flagged cells in each
+        of the previous ``persistence - 1`` frames: independent movers persist
+        in place, most noise does not."""
+        recent, self._recent = self._recent, [*self._recent, flagged][-(self.persistence - 1) :]
+        if self.persistence <= 1:
+            return flagged, regions
+        if len(recent) < self.persistence - 1:
+            return np.zeros_like(flagged), []
+        grown = [cv2.dilate(r.astype(np.uint8), _GROW) > 0 for r in recent]
+        kept = [r for r in regions if all(g[r.cells[:, 0], r.cells[:, 1]].any() for g in grown)]
+        return (regions_mask(kept) if kept else np.zeros_like(flagged)), kept
+
     def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
         """Run one frame through the stages and the detectors."""
         flow = self.pipeline.process(frame)
@@ -116,6 +139,7 @@ class MotionDetector:
             return FrameResult(index, time_s, [], empty, None, None, None)
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         flagged, regions = fuse(outputs, flow.geometry, self.min_cells)
+        flagged, regions = self._persistent(flagged, regions)
         ray = outputs.get("constraint-ray")
         observer = ray.observer if ray else None
         coarse = ray.coarse if ray else None

@@ -1,7 +1,7 @@
 """Motion events: contiguous runs of frames with detections.
 
 A run of active frames becomes an event when, after bridging gaps of at most
-``merge_gap`` frames, it is at least ``min_frames`` long; it is then padded
+``merge_gap`` frames, it holds at least ``min_frames`` active frames; it is then padded
 by ``pad`` frames on each side (clipped to the video) and events that
 overlap after padding are merged.
 """
@@ -43,7 +43,8 @@ def find_runs(active: np.ndarray, rules: EventRules) -> list[tuple[int, int]]:
             start = i
         prev = i
     runs.append((start, prev))
-    runs = [(a, b) for a, b in runs if b - a + 1 >= rules.min_frames]
+    # The minimum length counts frames with motion, not the bridged span.
+    runs = [(a, b) for a, b in runs if int(active[a : b + 1].sum()) >= rules.min_frames]
     last = len(active) - 1
     padded: list[tuple[int, int]] = []
     for a, b in runs:

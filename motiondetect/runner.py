@@ -244,6 +244,7 @@ def _make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
         constraint_ray=settings.constraint_ray_config(),
         animate=settings.animate_config(),
         egomotion=ego,
+        persistence=settings.persistence,
     )
 
 
@@ -285,6 +286,8 @@ def _process(
     info = source.info
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").unlink(missing_ok=True)
+    for stale in out_dir.glob(".*.part*"):  # temporaries of an interrupted run
+        stale.unlink(missing_ok=True)
     detector = _make_detector(settings, source)
     roi = _roi_mask(settings, info.width, info.height)
     timeline = EventTimeline()
@@ -400,6 +403,7 @@ def extract_clips(
                 stages=settings.stage_config(),
                 constraint_ray=settings.constraint_ray_config(),
                 animate=settings.animate_config(),
+                persistence=settings.persistence,
             )
         for frame in source:
             result = detector.process(frame.image, frame.index, frame.time_s) if detector else None

@@ -19,6 +19,7 @@ from .pipeline import StageConfig
 DEFAULTS: dict[str, object] = {
     "output": "motiondetect-out",
     "detector": "both",
+    "persistence": 2,
     "masks": False,
     "video": True,
     "work_size": 512,
@@ -54,6 +55,7 @@ class Settings:
 
     output: Path
     detector: str = "both"
+    persistence: int = 2
     masks: bool = False
     video: bool = True
     work_size: int = 512
@@ -141,6 +143,8 @@ def make_settings(values: dict) -> Settings:
             merged[key] = Path(merged[key])
     rois = merged["roi"]
     merged["roi"] = tuple(parse_roi(r) if isinstance(r, str) else tuple(r) for r in rois)
+    if merged["persistence"] < 1:
+        raise SettingsError(f"--persistence must be at least 1, but got {merged['persistence']}")
     if merged["jobs"] < 1:
         raise SettingsError(f"--jobs must be at least 1, but got {merged['jobs']}")
     for key in ("min_event_frames", "merge_gap_frames", "pad_frames", "min_area"):

@@ -24,9 +24,14 @@ def to_input_mask(flagged: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return cv2.resize(flagged.astype(np.uint8) * 255, (w, h), interpolation=cv2.INTER_NEAREST)
 
 
-def run_detector(frames, detector: str = "constraint-ray", warmup: int = 2, **kw):
-    """Score a detector on rendered frames: (counts, classes per frame, results)."""
-    md = MotionDetector(detector, **kw)
+def run_detector(
+    frames, detector: str = "constraint-ray", warmup: int = 2, persistence: int = 1, **kw
+):
+    """Score a detector on rendered frames: (counts, classes per frame, results).
+
+    ``persistence=1`` measures the detector itself, without the temporal filter.
+    """
+    md = MotionDetector(detector, persistence=persistence, **kw)
     counts, classes, results = Counts(), [], []
     for fr in frames:
         res = md.process(fr.image, fr.index, fr.index / 30.0)
