@@ -13,6 +13,7 @@ gradients and directions are still expressed in isotropic working pixels
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -142,9 +143,9 @@ class NormalFlowField:
     level: np.ndarray
     geometry: GridGeometry
 
-    @property
+    @cached_property
     def normal(self) -> tuple[np.ndarray, np.ndarray]:
-        """Unit gradient direction (nx, ny), each (64, 64) float32."""
+        """Unit gradient direction (nx, ny), each (64, 64) float32 (computed once)."""
         return np.cos(self.direction_rad), np.sin(self.direction_rad)
 
 

@@ -345,6 +345,16 @@ def write_png(path: Path, image: np.ndarray) -> None:
     os.replace(tmp, path)
 
 
+def count_decodable_frames(path: str | Path) -> int:
+    """Decode a video to the end and count its frames (container counts can lie)."""
+    cap = cv2.VideoCapture(str(path))
+    count = 0
+    while cap.grab():
+        count += 1
+    cap.release()
+    return count
+
+
 def read_mask(path: Path) -> np.ndarray | None:
     data = np.fromfile(str(path), np.uint8)
     image = cv2.imdecode(data, cv2.IMREAD_GRAYSCALE) if data.size else None

@@ -14,6 +14,7 @@ import jsonschema
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from motiondetect.video import count_decodable_frames
 from motiondetect_cli.main import main
 
 from .scenes import scene
@@ -45,12 +46,7 @@ def clip(tmp_path_factory, clip_frames) -> Path:
 
 
 def decode_count(path: Path) -> int:
-    cap = cv2.VideoCapture(str(path))
-    n = 0
-    while cap.read()[0]:
-        n += 1
-    cap.release()
-    return n
+    return count_decodable_frames(path)
 
 
 def invoke(*args: str) -> object:
