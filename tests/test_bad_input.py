@@ -141,3 +141,27 @@ def test_interrupted_output_is_not_taken_as_finished(tmp_path, frames):
     check_outputs(out / "v", 8, video=False)  # redone, not skipped
     leftovers = [p.name for p in (out / "v").iterdir() if p.name.startswith(".")]
     assert leftovers == []
+
+
+def test_variable_frame_rate_times_come_from_timestamps(tmp_path, frames):
+    """Irregular presentation times survive: not index / fps."""
+    av = pytest.importorskip("av")
+    import fractions
+
+    path = tmp_path / "vfr.mkv"
+    times_ms = [0, 33, 66, 200, 233, 500, 533, 566]
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("ffv1", rate=1000)
+        stream.width, stream.height, stream.pix_fmt = 160 * 2, 120 * 2, "yuv420p"
+        stream.time_base = fractions.Fraction(1, 1000)
+        for image, t in zip(frames, times_ms):
+            frame = av.VideoFrame.from_ndarray(image[..., ::-1].copy(), format="rgb24")
+            frame.pts, frame.time_base = t, fractions.Fraction(1, 1000)
+            for packet in stream.encode(frame):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    result = run("detect", path, "-o", tmp_path / "o", "-q", "--no-video")
+    assert result.exit_code == 0, result.output
+    lines = (tmp_path / "o" / "vfr" / "frames.jsonl").read_text().splitlines()
+    assert [json.loads(x)["time_s"] for x in lines] == [t / 1000 for t in times_ms]

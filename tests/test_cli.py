@@ -104,6 +104,7 @@ def test_finished_inputs_are_skipped_unless_overwrite(tmp_path, clip):
         ["--ego-model", "paper", "--frames-fps", "25"],
         ["--min-event-frames", "1", "--merge-gap-frames", "0", "--pad-frames", "0"],
         ["--no-timeline", "-v"],
+        ["--persistence", "1"],
     ],
 )
 def test_options_reach_the_settings(tmp_path, clip, options):
