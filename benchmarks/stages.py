@@ -28,6 +28,7 @@ def per_stage(frames: list[np.ndarray], config: StageConfig) -> dict[str, float]
     t = dict.fromkeys(
         [
             "grey",
+            "pre-reduce",
             "blur",
             "reduce",
             "diff_avg",
@@ -43,12 +44,15 @@ def per_stage(frames: list[np.ndarray], config: StageConfig) -> dict[str, float]
     for f in frames:
         a = time.perf_counter()
         g = stages.to_grey(f)
+        a2 = time.perf_counter()
+        g = stages.to_working_size(g.astype(np.float32), (256, 256))  # as the pipeline does
         b = time.perf_counter()
-        bl = stages.blur(g, config.blur_sigma_px)
+        bl = stages.blur(g, config.blur_sigma_px / 2)
         c = time.perf_counter()
         r = stages.reduce_to_grid(bl, grid)
         d = time.perf_counter()
-        t["grey"] += b - a
+        t["grey"] += a2 - a
+        t["pre-reduce"] += b - a2
         t["blur"] += c - b
         t["reduce"] += d - c
         if prev is not None:

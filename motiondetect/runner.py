@@ -475,6 +475,9 @@ def run(
             finish(process_input(job, settings, progress))
     else:
         # spawn, not fork: forking after OpenCV's thread pool started can deadlock.
+        # One thread per worker process: the parallelism is across inputs.
+        for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(var, "1")
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=settings.jobs, mp_context=context) as pool:
             futures = {pool.submit(_worker, job, settings): job for job in jobs}

@@ -275,15 +275,17 @@ def subsample(key: np.ndarray, *fields: np.ndarray, grid: int = GRID) -> tuple[n
     tuple of (G, G) ndarrays
         The reduced key, then each reduced field.
     """
-    rows, cols = key.shape
-    ky, kx = rows // grid, cols // grid
-    if ky * grid != rows or kx * grid != cols:
+    rows_total, cols_total = key.shape
+    ky, kx = rows_total // grid, cols_total // grid
+    if ky * grid != rows_total or kx * grid != cols_total:
         raise ValueError(f"key must be a multiple of {grid} per axis, but got shape {key.shape}")
     if ky == kx == 1:
         return (key, *fields)
 
-    def blocks(a: np.ndarray) -> np.ndarray:
-        return a.reshape(grid, ky, grid, kx).transpose(0, 2, 1, 3).reshape(grid, grid, ky * kx)
-
-    pick = np.argmax(blocks(key), axis=2)[..., None]
-    return tuple(np.take_along_axis(blocks(a), pick, axis=2)[..., 0] for a in (key, *fields))
+    blocks = key.reshape(grid, ky, grid, kx).transpose(0, 2, 1, 3).reshape(grid, grid, ky * kx)
+    pick = np.argmax(blocks, axis=2)
+    # One flat index into the full-size arrays, then a plain gather per field.
+    rows = np.arange(grid)[:, None] * ky + pick // kx
+    cols = np.arange(grid)[None, :] * kx + pick % kx
+    flat = rows * cols_total + cols
+    return tuple(a.ravel()[flat] for a in (key, *fields))

@@ -14,8 +14,9 @@ import jsonschema
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from motiondetect.video import count_decodable_frames
 from motiondetect_cli.main import main
+
+from motiondetect.video import count_decodable_frames
 
 from .scenes import scene
 
