@@ -35,6 +35,9 @@ from motiondetect.video import open_source  # noqa: E402
 VARIANTS = {
     "detect both, reports, no video": dict(detector="both", video=False, timeline=False),
     "detect both, reports + annotated video": dict(detector="both", video=True, timeline=False),
+    "detect both, reports + annotated mp4": dict(
+        detector="both", video=True, video_format="mp4", timeline=False
+    ),
     "detect constraint-ray only": dict(detector="constraint-ray", video=False, timeline=False),
     "detect animate only": dict(detector="animate", video=False, timeline=False),
 }

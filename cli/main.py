@@ -93,6 +93,12 @@ def _d(key: str) -> str:
 @click.option("--masks/--no-masks", default=None, help="Write masks/NNNNNN.png (0/255).")
 @click.option("--video/--no-video", default=None, help="Write annotated.webm (default: on).")
 @click.option(
+    "--video-format",
+    type=click.Choice(["webm", "mp4"]),
+    help="annotated.webm (VP8, plays in browsers) or annotated.mp4 (MPEG-4 Part 2, "
+    f"several times faster to encode, not for browsers) {_d('video_format')}.",
+)
+@click.option(
     "--work-size",
     type=click.IntRange(64, 4096),
     help=f"Long side of the working resolution, px {_d('work_size')}.",

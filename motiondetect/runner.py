@@ -297,7 +297,8 @@ def _process(
             shutil.rmtree(masks_dir)
         masks_dir.mkdir()
     size = annotated_size(info.width, info.height, settings.work_size)
-    sink = VideoSink(out_dir / "annotated.webm", info.fps, size) if settings.video else None
+    video_path = out_dir / f"annotated.{settings.video_format}"
+    sink = VideoSink(video_path, info.fps, size) if settings.video else None
     started = time.perf_counter()
     n_detections = 0
     try:

@@ -22,6 +22,7 @@ DEFAULTS: dict[str, object] = {
     "persistence": 2,
     "masks": False,
     "video": True,
+    "video_format": "webm",
     "work_size": 512,
     "egomotion": None,
     "jobs": 1,
@@ -58,6 +59,7 @@ class Settings:
     persistence: int = 2
     masks: bool = False
     video: bool = True
+    video_format: str = "webm"
     work_size: int = 512
     egomotion: Path | None = None
     jobs: int = 1
@@ -143,6 +145,10 @@ def make_settings(values: dict) -> Settings:
             merged[key] = Path(merged[key])
     rois = merged["roi"]
     merged["roi"] = tuple(parse_roi(r) if isinstance(r, str) else tuple(r) for r in rois)
+    if merged["video_format"] not in ("webm", "mp4"):
+        raise SettingsError(
+            f"--video-format must be webm or mp4, but got {merged['video_format']!r}"
+        )
     if merged["persistence"] < 1:
         raise SettingsError(f"--persistence must be at least 1, but got {merged['persistence']}")
     if merged["jobs"] < 1:

@@ -106,11 +106,15 @@ def test_finished_inputs_are_skipped_unless_overwrite(tmp_path, clip):
         ["--min-event-frames", "1", "--merge-gap-frames", "0", "--pad-frames", "0"],
         ["--no-timeline", "-v"],
         ["--persistence", "1"],
+        ["--video-format", "mp4"],
     ],
 )
 def test_options_reach_the_settings(tmp_path, clip, options):
-    result = invoke("detect", clip, "-o", tmp_path, "--no-video", "-q", *options)
+    video = ["--no-video"] if "--video-format" not in options else []
+    result = invoke("detect", clip, "-o", tmp_path, "-q", *video, *options)
     assert result.exit_code == 0, result.output
+    if "--video-format" in options:
+        assert count_decodable_frames(tmp_path / "pan" / "annotated.mp4") == 16
     summary = check_outputs(
         tmp_path / "pan", 16, video=False, timeline="--no-timeline" not in options
     )
