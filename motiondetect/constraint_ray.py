@@ -214,8 +214,6 @@ class ConstraintRayConfig:
         Share of still regions above which the observer is static.
     min_confidence : float
         Below this classification confidence nothing is flagged.
-    smoothing : int
-        Majority vote of the class over this many frames (1 = none).
     """
 
     ego_model: Literal["fitted", "paper"] = "fitted"
@@ -227,7 +225,6 @@ class ConstraintRayConfig:
     min_cells: int = 3
     static_fraction: float = 0.6
     min_confidence: float = 0.2
-    smoothing: int = 1
 
     def __post_init__(self) -> None:
         if self.ego_model not in ("fitted", "paper"):
@@ -235,8 +232,6 @@ class ConstraintRayConfig:
         for name in ("noise_grey", "noise_sigmas", "tolerance_floor_px"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
-        if self.smoothing < 1:
-            raise ValueError(f"smoothing must be at least 1, but got {self.smoothing}")
 
 
 @dataclass(frozen=True)
@@ -267,7 +262,6 @@ class ConstraintRayDetector:
     def __init__(self, config: ConstraintRayConfig | None = None, egomotion=None) -> None:
         self.config = config or ConstraintRayConfig()
         self.egomotion = egomotion
-        self._recent_classes: list[int] = []
 
     def _observer(self, field: NormalFlowField, coarse: CoarseField, frame_index: int):
         cfg = self.config
@@ -278,12 +272,6 @@ class ConstraintRayDetector:
         entry, class_id, confidence = classify(
             coarse, field.geometry, static_fraction=cfg.static_fraction
         )
-        if cfg.smoothing > 1:
-            self._recent_classes = [*self._recent_classes[-(cfg.smoothing - 1) :], class_id]
-            votes = np.bincount(np.array(self._recent_classes) + 1)
-            majority = int(votes.argmax()) - 1
-            if majority != class_id and votes[majority + 1] > votes[class_id + 1]:
-                confidence *= 0.5  # disagreeing with recent frames: trust less
         return constraint_model(entry, class_id, confidence, coarse, field, mode=cfg.ego_model)
 
     def process(self, field: NormalFlowField, frame_index: int = 0) -> DetectorOutput:

@@ -18,7 +18,7 @@ from .constraint_ray import ConstraintRayConfig, ConstraintRayDetector, Detector
 from .hough import CoarseField
 from .observer_motion import ObserverMotion
 from .pipeline import GridGeometry, NormalFlowField, NormalFlowPipeline, StageConfig
-from .regions import Region, drop_isolated, find_regions, regions_mask
+from .regions import Region, find_regions, regions_mask
 
 _GROW = np.ones((3, 3), np.uint8)
 
@@ -144,6 +144,3 @@ class MotionDetector:
         observer = ray.observer if ray else None
         coarse = ray.coarse if ray else None
         return FrameResult(index, time_s, regions, flagged, observer, coarse, flow, outputs)
-
-
-__all__ = ["DETECTORS", "FrameResult", "MotionDetector", "fuse", "drop_isolated"]

@@ -43,7 +43,7 @@ from .report import (
 from .settings import Settings
 from .timeline import draw_timeline
 from .video import (
-    VIDEO_EXTENSIONS,
+    IMAGE_EXTENSIONS,
     FrameSource,
     VideoError,
     VideoSink,
@@ -110,19 +110,24 @@ def discover_inputs(paths: list[Path], recursive: bool) -> list[InputJob]:
 
 
 def _scan_directory(root: Path, recursive: bool) -> list[InputJob]:
+    """Videos in ``root``; with ``recursive``, also in sub-folders, and each
+    frames folder found below ``root`` as one input (not descended into).
+    Loose images are skipped; other files become inputs that fail with a
+    clear "not a video" line, so nothing is skipped silently."""
     jobs = []
-    entries = sorted(root.rglob("*") if recursive else root.iterdir())
-    for entry in entries:
-        if any(part.startswith(".") for part in entry.relative_to(root).parts):
+    for entry in sorted(root.iterdir()):
+        if entry.name.startswith("."):
             continue
         rel = entry.relative_to(root)
-        if entry.is_file() and entry.suffix.lower() in VIDEO_EXTENSIONS:
+        if entry.is_dir():
+            if recursive and is_frames_folder(entry):
+                jobs.append(InputJob(entry, str(rel)))
+            elif recursive:
+                jobs.extend(
+                    InputJob(j.path, str(rel / j.name)) for j in _scan_directory(entry, recursive)
+                )
+        elif entry.suffix.lower() not in IMAGE_EXTENSIONS:
             jobs.append(InputJob(entry, str(rel.with_suffix(""))))
-        elif entry.is_file() and entry.suffix.lower() not in VIDEO_EXTENSIONS:
-            if entry.suffix.lower() not in {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff"}:
-                jobs.append(InputJob(entry, str(rel.with_suffix(""))))  # reported as not a video
-        elif recursive and entry.is_dir() and is_frames_folder(entry):
-            jobs.append(InputJob(entry, str(rel)))
     return jobs
 
 
@@ -351,7 +356,7 @@ def _process(
     if settings.timeline:
         write_png(out_dir / "timeline.png", draw_timeline(timeline, events))
     if settings.extract_clips and events:
-        extract_clips(job.path, out_dir / "events", events, settings, detector_factory=None)
+        extract_clips(job.path, out_dir / "events", events, settings)
     partial = source.partial
     if partial:
         log.warning(
@@ -381,9 +386,7 @@ def _process(
     return summary
 
 
-def extract_clips(
-    path: Path, clip_dir: Path, events: list[dict], settings: Settings, detector_factory=None
-) -> list[Path]:
+def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Settings) -> list[Path]:
     """Cut one clip per event (padding included) from the input frames.
 
     A second streaming pass over the input; with ``clips_annotated`` the

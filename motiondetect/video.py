@@ -234,8 +234,6 @@ class _FramesFolderSource(FrameSource):
                 log.warning("%s: skipping unreadable or differently sized frame", file)
                 self.partial = True
                 continue
-            if image.ndim == 3 and image.shape[2] == 4 and image.dtype == np.uint8:
-                pass  # BGRA is accepted by the stages as is
             yield SourceFrame(index, index / self.info.fps, image, self._numbers[i])
             index += 1
 
