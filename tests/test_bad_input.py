@@ -165,3 +165,26 @@ def test_variable_frame_rate_times_come_from_timestamps(tmp_path, frames):
     assert result.exit_code == 0, result.output
     lines = (tmp_path / "o" / "vfr" / "frames.jsonl").read_text().splitlines()
     assert [json.loads(x)["time_s"] for x in lines] == [t / 1000 for t in times_ms]
+
+
+def test_rotation_metadata_is_applied_and_reported(tmp_path, frames):
+    """A 90-degree display matrix in the MP4 track header (as phones write it)."""
+    import struct
+
+    path = write_video(tmp_path / "upright.mp4", frames[:6])
+    data = bytearray(path.read_bytes())
+    box = data.find(b"tkhd") - 4
+    version = data[box + 8]
+    matrix = box + 8 + 4 + (20 if version == 0 else 32) + 8 + 8
+    assert struct.unpack(">9i", data[matrix : matrix + 36])[0] == 0x00010000  # identity
+    data[matrix : matrix + 36] = struct.pack(
+        ">9i", 0, 0x00010000, 0, -0x00010000, 0, 0, 0, 0, 0x40000000
+    )
+    rotated = tmp_path / "phone.mp4"
+    rotated.write_bytes(bytes(data))
+    result = run("detect", rotated, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 0, result.output
+    summary = check_outputs(tmp_path / "o" / "phone", 6)
+    h, w = frames[0].shape[:2]
+    assert (summary["input"]["width"], summary["input"]["height"]) == (h, w)  # portrait now
+    assert summary["input"]["rotation_deg"] in (90, 270)
