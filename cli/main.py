@@ -382,7 +382,7 @@ def synth(
         except OSError as exc:
             _fail(f"cannot create {output}: {exc.strerror or exc}")
         write_sequence(config, output)
-        click.echo(f"wrote {output}/video.mp4, {output}/groundtruth/, {output}/scene.json")
+        click.echo(f"wrote {output}/video.mp4, {output}/truth/, {output}/scene.json")
 
 
 # ----------------------------------------------------------------------------

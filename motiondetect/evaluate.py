@@ -2,13 +2,13 @@
 
 Ground truth is a folder of PNG masks in any of these layouts (or a
 sequence folder holding one such folder as ``groundtruth/``,
-``Annotations/`` or ``masks/``):
+``Annotations/``, ``truth/`` or ``masks/``):
 
 * CDnet / SBI / UCSD: ``gtNNNNNN.png``; 0 static, 50 shadow (static),
   85 outside the region of interest and 170 unknown (both not scored),
   255 moving;
 * DAVIS: ``NNNNN.png``, 0/255;
-* motiondetect synth: ``NNNNNN.png``, 0/170/255.
+* motiondetect synth: ``truth/NNNNNN.png``, 0/170/255.
 
 GT files are sorted by the number in their names and aligned to predicted
 frames by subtracting the smallest number (UCSD starts at 1, the others at
@@ -29,7 +29,7 @@ import numpy as np
 
 from .video import read_mask
 
-GT_FOLDERS = ("groundtruth", "Annotations", "masks")
+GT_FOLDERS = ("groundtruth", "Annotations", "truth", "masks")
 UNKNOWN_VALUES = (85, 170)
 
 

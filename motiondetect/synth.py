@@ -417,7 +417,7 @@ def render_frames(config: SynthConfig) -> Iterator[Frame]:
 
 
 def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4") -> dict:
-    """Render ``config`` to ``out_dir``: video, ``groundtruth/`` masks and ``scene.json``.
+    """Render ``config`` to ``out_dir``: video, ``truth/`` masks and ``scene.json``.
 
     The scene file is in the ego-motion format (usable as ``--egomotion``)
     with the true nearest rigid depth as ``min_depth``.
@@ -429,7 +429,7 @@ def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4
     from .video import VideoSink, write_png
 
     out = Path(out_dir)
-    gt_dir = out / "groundtruth"
+    gt_dir = out / "truth"
     gt_dir.mkdir(parents=True, exist_ok=True)
     poses, nearest, movers = [], np.inf, []
     with VideoSink(out / video_name, config.fps, (config.width, config.height)) as sink:

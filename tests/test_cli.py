@@ -317,7 +317,7 @@ def test_synth_and_evaluate_commands(tmp_path):
     )
     assert result.exit_code == 0, result.output
     assert decode_count(tmp_path / "s" / "video.mp4") == 12
-    assert len(list((tmp_path / "s" / "groundtruth").glob("*.png"))) == 12
+    assert len(list((tmp_path / "s" / "truth").glob("*.png"))) == 12
     assert (
         invoke(
             "detect",
