@@ -202,35 +202,35 @@ def detect(inputs, config_file, quiet, verbose, **options) -> None:
 
             return progress
 
-        overall = None
+        bars["overall"] = None
+
+        def on_jobs(count):
+            if count > 1 and not quiet:
+                bars["overall"] = tqdm(total=count, desc="inputs", unit="input", dynamic_ncols=True)
 
         def on_done(result):
             bar = bars.pop("frame", None)
             if bar is not None:
                 bar.close()
-            if overall is not None:
-                overall.update(1)
+            if bars["overall"] is not None:
+                bars["overall"].update(1)
             if result.status == "failed":
                 log.error("%s", result.message)
 
         with logging_redirect_tqdm(loggers=[log]):
-            from motiondetect.runner import discover_inputs
-
-            n_jobs = len(discover_inputs(list(inputs), settings.recursive))
-            if n_jobs > 1 and not quiet:
-                overall = tqdm(total=n_jobs, desc="inputs", unit="input", dynamic_ncols=True)
             try:
                 result = run(
                     list(inputs),
                     settings,
                     on_start=on_start if settings.jobs == 1 else None,
                     on_done=on_done,
+                    on_jobs=on_jobs,
                 )
             except InputError as exc:
                 _fail(str(exc))
             finally:
-                if overall is not None:
-                    overall.close()
+                if bars["overall"] is not None:
+                    bars["overall"].close()
         if not quiet:
             _print_summary(result)
         if result.failed:

@@ -118,13 +118,31 @@ def flow_vector_angle(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndar
     return np.where(flow_px >= 0, direction_rad, direction_rad + np.pi)
 
 
+def _codes(
+    flow_px: np.ndarray, direction_rad: np.ndarray, still_px: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Value bit (8 directions) and footprint class (16 directions) of each
+    measurement, sharing one angle and one magnitude-bin computation."""
+    angle = flow_vector_angle(flow_px, direction_rad)
+    speed = np.abs(flow_px)
+    mag = np.searchsorted(MAGNITUDE_EDGES_PX, speed, side="right")
+    still = speed < still_px
+
+    def direction_bin(n: int) -> np.ndarray:
+        return np.rint(angle / (2 * np.pi / n)).astype(np.int64) % n
+
+    bits = np.where(still, STILL_BIT, direction_bin(VALUE_DIRECTIONS) * VALUE_MAGNITUDES + mag)
+    classes = np.where(
+        still,
+        FOOTPRINT_DIRECTIONS * VALUE_MAGNITUDES,
+        direction_bin(FOOTPRINT_DIRECTIONS) * VALUE_MAGNITUDES + mag,
+    )
+    return bits, classes
+
+
 def value_bits(flow_px: np.ndarray, direction_rad: np.ndarray, still_px: float) -> np.ndarray:
     """Bit index (0..48) of each measured value."""
-    angle = flow_vector_angle(flow_px, direction_rad)
-    d = np.rint(angle / (2 * np.pi / VALUE_DIRECTIONS)).astype(np.int64) % VALUE_DIRECTIONS
-    mag = np.searchsorted(MAGNITUDE_EDGES_PX, np.abs(flow_px), side="right")
-    bit = d * VALUE_MAGNITUDES + mag
-    return np.where(np.abs(flow_px) < still_px, STILL_BIT, bit)
+    return _codes(flow_px, direction_rad, still_px)[0]
 
 
 def decode_bit(bit: int) -> tuple[str, int, int]:
@@ -259,11 +277,8 @@ def stencil_table(
 def footprint_classes(
     flow_px: np.ndarray, direction_rad: np.ndarray, still_px: float
 ) -> np.ndarray:
-    angle = flow_vector_angle(flow_px, direction_rad)
-    d = np.rint(angle / (2 * np.pi / FOOTPRINT_DIRECTIONS)).astype(np.int64) % FOOTPRINT_DIRECTIONS
-    mag = np.searchsorted(MAGNITUDE_EDGES_PX, np.abs(flow_px), side="right")
-    cls = d * VALUE_MAGNITUDES + mag
-    return np.where(np.abs(flow_px) < still_px, FOOTPRINT_DIRECTIONS * VALUE_MAGNITUDES, cls)
+    """Stencil class of each measurement (see :func:`stencil_table`)."""
+    return _codes(flow_px, direction_rad, still_px)[1]
 
 
 def shift(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
@@ -286,9 +301,8 @@ def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
     offsets, covers = stencil_table(
         field.geometry, config.max_speed_px, config.counterflow_cells, config.still_px
     )
-    bits = value_bits(field.flow_px, field.direction_rad, config.still_px)
+    bits, classes = _codes(field.flow_px, field.direction_rad, config.still_px)
     word = np.where(field.valid, _ONE << bits.astype(np.uint64), np.uint64(0))
-    classes = footprint_classes(field.flow_px, field.direction_rad, config.still_px)
     out = np.zeros(word.shape, np.uint64)
     for (dy, dx), cover in zip(offsets, covers):
         contrib = np.where(cover[classes], word, np.uint64(0))

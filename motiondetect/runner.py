@@ -402,13 +402,7 @@ def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Sett
         info = source.info
         size = (info.width - info.width % 2, info.height - info.height % 2)
         if settings.clips_annotated:
-            detector = MotionDetector(
-                settings.detector,
-                stages=settings.stage_config(),
-                constraint_ray=settings.constraint_ray_config(),
-                animate=settings.animate_config(),
-                persistence=settings.persistence,
-            )
+            detector = _make_detector(settings, source)
         for frame in source:
             result = detector.process(frame.image, frame.index, frame.time_s) if detector else None
             if not pending:
@@ -449,14 +443,17 @@ def run(
     *,
     on_start: Callable[[InputJob, int], Progress | None] | None = None,
     on_done: Callable[[InputResult], None] | None = None,
+    on_jobs: Callable[[int], None] | None = None,
 ) -> RunResult:
     """Process every input; one failure never stops the others.
 
     ``on_start(job, expected_frames)`` may return a per-frame progress
     callback (used with one job at a time); ``on_done(result)`` is called as
-    each input finishes.
+    each input finishes; ``on_jobs(count)`` once the inputs are known.
     """
     jobs = discover_inputs(inputs, settings.recursive)
+    if on_jobs is not None:
+        on_jobs(len(jobs))
     try:
         settings.output.mkdir(parents=True, exist_ok=True)
         probe = settings.output / f".motiondetect-write-test-{os.getpid()}"

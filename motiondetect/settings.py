@@ -52,34 +52,35 @@ class SettingsError(ValueError):
 
 @dataclass(frozen=True)
 class Settings:
-    """Everything one run needs. Build it with :func:`make_settings`."""
+    """Everything one run needs. Build it with :func:`make_settings`, which fills
+    every field from :data:`DEFAULTS` (the one table of defaults)."""
 
     output: Path
-    detector: str = "both"
-    persistence: int = 2
-    masks: bool = False
-    video: bool = True
-    video_format: str = "webm"
-    work_size: int = 512
-    egomotion: Path | None = None
-    jobs: int = 1
-    overwrite: bool = False
-    recursive: bool = False
-    frames_fps: float = 30.0
-    ego_model: str = "fitted"
-    arithmetic: str = "float"
-    pyramid: bool = True
-    first_appearance: str = "ignore"
-    jitter_compensation: bool = True
-    min_event_frames: int = 3
-    merge_gap_frames: int = 5
-    pad_frames: int = 5
-    extract_clips: bool = False
-    clips_annotated: bool = False
-    roi: tuple = ()
-    roi_file: Path | None = None
-    min_area: int = 0
-    timeline: bool = True
+    detector: str
+    persistence: int
+    masks: bool
+    video: bool
+    video_format: str
+    work_size: int
+    egomotion: Path | None
+    jobs: int
+    overwrite: bool
+    recursive: bool
+    frames_fps: float
+    ego_model: str
+    arithmetic: str
+    pyramid: bool
+    first_appearance: str
+    jitter_compensation: bool
+    min_event_frames: int
+    merge_gap_frames: int
+    pad_frames: int
+    extract_clips: bool
+    clips_annotated: bool
+    roi: tuple
+    roi_file: Path | None
+    min_area: int
+    timeline: bool
     extra: dict = field(default_factory=dict)
 
     def stage_config(self) -> StageConfig:
