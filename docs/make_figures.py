@@ -108,13 +108,17 @@ def constraint_regions_figure() -> np.ndarray:
 
 
 def footprints_figure() -> np.ndarray:
-    """Figure 8: a footprint, and one extended through the counterflow side."""
+    """Figure 8: a footprint, extended through the counterflow side, and ahead."""
     panels = []
-    for title, back in (("footprint", 0.0), ("extended to the counterflow side", 1.0)):
+    for title, back, ahead in (
+        ("footprint", 0.0, 0.0),
+        ("+ counterflow side (Fig. 8)", 1.0, 0.0),
+        ("+ ahead (uncovered background)", 1.0, 2.0),
+    ):
         cell = 28
         r = 4
         img = np.full(((2 * r + 1) * cell, (2 * r + 1) * cell, 3), 255, np.uint8)
-        cells = footprint_cells(12.0, np.deg2rad(30), (8.0, 8.0), 14.0, back)
+        cells = footprint_cells(12.0, np.deg2rad(30), (8.0, 8.0), 14.0, back, ahead)
         for dy, dx in cells:
             y0, x0 = (dy + r) * cell, (dx + r) * cell
             cv2.rectangle(img, (x0, y0), (x0 + cell - 1, y0 + cell - 1), (240, 200, 150), -1)
@@ -169,6 +173,10 @@ def main() -> None:
             str(args.out / "clip_normal_flow.png"), normal_flow_figure(frames, args.clip.name)
         )
         cv2.imwrite(str(args.out / "clip_detection.png"), detection_figure(args.clip, args.frame))
+        cv2.imwrite(
+            str(args.out / "clip_detection_animate.png"),
+            detection_figure(args.clip, args.frame, "animate"),
+        )
         return
     photo = data.astronaut()
     h, w = photo.shape[:2]

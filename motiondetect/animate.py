@@ -39,11 +39,19 @@ from .regions import drop_isolated, find_regions
 
 NAME = "animate"
 
-VALUE_DIRECTIONS = 8
-MAGNITUDE_EDGES_PX = np.array([0.6, 1.2, 2.4, 4.8, 9.6])  # bins: <0.6, ..., >= 9.6 (above still)
-VALUE_MAGNITUDES = len(MAGNITUDE_EDGES_PX) + 1
-STILL_BIT = VALUE_DIRECTIONS * VALUE_MAGNITUDES  # 48
-FOOTPRINT_DIRECTIONS = 16  # finer, for the footprint geometry only
+# Values: the gradient orientation (mod pi) in 8 bins x the signed normal flow
+# along it in 15 bins; 16 bits per orientation, so two 64-bit words per cell.
+ORIENTATIONS = 8
+FLOW_EDGES_PX = np.array([0.4, 1.2, 2.2, 3.5, 5.0, 7.0, 9.5])
+FLOW_EDGES_SIGNED = np.concatenate([-FLOW_EDGES_PX[::-1], FLOW_EDGES_PX])
+FLOW_BINS = len(FLOW_EDGES_SIGNED) + 1  # 15; the middle one is "still"
+SLOT_BITS = 16
+WORDS = ORIENTATIONS * SLOT_BITS // 64  # 2
+SLOTS_PER_WORD = 64 // SLOT_BITS  # 4
+# Footprint geometry only: 16 directions of the vector m n x 6 magnitudes + still.
+FOOTPRINT_DIRECTIONS = 16
+FOOTPRINT_MAGNITUDE_EDGES_PX = np.array([0.6, 1.2, 2.4, 4.8, 9.6])
+FOOTPRINT_MAGNITUDES = len(FOOTPRINT_MAGNITUDE_EDGES_PX) + 1
 STENCIL_RADIUS = 4  # cells
 
 
@@ -57,19 +65,27 @@ class AnimateConfig:
         Speed bound of a rigid point, work px/frame: how far along the
         constraint line the footprint reaches.
     counterflow_cells : float
-        How far the footprint extends behind its generating point, cells.
+        How far the footprint extends behind its generating point, cells
+        (Figure 8: objects emerging from behind an occluder).
+    ahead_cells : float
+        How far the footprint extends beyond the predicted position, cells:
+        background uncovered at the trailing edge of a faster occluder
+        appears ahead of its visible part (the mirror case of Figure 8).
     still_px : float
-        Normal flow below this is the "still" value.
+        Normal flow below this is "still": its footprint is a small disk.
     noise_grey, noise_sigmas, tolerance_floor_px : float
         Measurement tolerance, ``noise_sigmas * noise_grey / |grad I|``
         with a floor.
-    accel_bins : int
-        Extra magnitude bins a value may move by between frames.
+    accel_px : float
+        Change of the normal flow a rigid point may show between frames,
+        px/frame (smooth observer motion: section 4.1 puts it at about the
+        squared angular speed, well under a pixel).
     accel_relative : float
-        Relative change of ``|m|`` allowed between frames (smooth change).
+        Further allowance proportional to ``|m|``: the stages' error grows
+        with speed (docs/stages.md).
     first_appearance : {"ignore", "flag"}
-        Motion where no footprint landed: ignored (default: at weak-texture
-        borders it is mostly noise), or flagged as the paper suggests.
+        Motion where no footprint of the same gradient orientation landed:
+        ignored (default), or flagged as the paper suggests.
     jitter_compensation : bool
     min_gradient : float
         Only measurements with at least this gradient (grey/work px) are
@@ -83,15 +99,16 @@ class AnimateConfig:
 
     max_speed_px: float = 6.0
     counterflow_cells: float = 1.0
+    ahead_cells: float = 2.0
     still_px: float = 0.3
     noise_grey: float = 1.0
     noise_sigmas: float = 2.0
     tolerance_floor_px: float = 0.2
-    accel_bins: int = 0
-    accel_relative: float = 0.5
+    accel_px: float = 0.75
+    accel_relative: float = 0.1
     first_appearance: Literal["ignore", "flag"] = "ignore"
     jitter_compensation: bool = True
-    min_gradient: float = 1.0
+    min_gradient: float = 2.0
     border_cells: int = 2
     min_neighbours: int = 2
     min_cells: int = 3
@@ -104,8 +121,9 @@ class AnimateConfig:
         for name in ("max_speed_px", "still_px", "noise_grey", "noise_sigmas"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
-        if self.counterflow_cells < 0 or self.accel_bins < 0:
-            raise ValueError("counterflow_cells and accel_bins must not be negative")
+        for name in ("counterflow_cells", "ahead_cells", "accel_px", "accel_relative"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must not be negative, but got {getattr(self, name)}")
 
 
 # ----------------------------------------------------------------------------
@@ -113,85 +131,97 @@ class AnimateConfig:
 # ----------------------------------------------------------------------------
 
 
-def flow_vector_angle(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
-    """Angle of the vector ``m n`` (points against n when m < 0)."""
-    return np.where(flow_px >= 0, direction_rad, direction_rad + np.pi)
+def oriented(flow_px: np.ndarray, direction_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gradient orientation in [0, pi) and the normal flow signed along it.
+
+    ``(theta, m)`` and ``(theta + pi, -m)`` are the same measurement.
+    """
+    theta = np.asarray(direction_rad, np.float64)
+    m = np.asarray(flow_px, np.float64)
+    flip = (theta < 0) | (theta >= np.pi)
+    return np.mod(theta, np.pi), np.where(flip, -m, m)
 
 
-def _codes(
-    flow_px: np.ndarray, direction_rad: np.ndarray, still_px: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Value bit (8 directions) and footprint class (16 directions) of each
-    measurement, sharing one angle and one magnitude-bin computation."""
-    angle = flow_vector_angle(flow_px, direction_rad)
-    speed = np.abs(flow_px)
-    mag = np.searchsorted(MAGNITUDE_EDGES_PX, speed, side="right")
-    still = speed < still_px
-
-    def direction_bin(n: int) -> np.ndarray:
-        return np.rint(angle / (2 * np.pi / n)).astype(np.int64) % n
-
-    bits = np.where(still, STILL_BIT, direction_bin(VALUE_DIRECTIONS) * VALUE_MAGNITUDES + mag)
-    classes = np.where(
-        still,
-        FOOTPRINT_DIRECTIONS * VALUE_MAGNITUDES,
-        direction_bin(FOOTPRINT_DIRECTIONS) * VALUE_MAGNITUDES + mag,
-    )
-    return bits, classes
+def orientation_bin(theta: np.ndarray) -> np.ndarray:
+    """Bin 0..7 of an orientation in [0, pi)."""
+    return np.floor(theta / (np.pi / ORIENTATIONS)).astype(np.int64) % ORIENTATIONS
 
 
-def value_bits(flow_px: np.ndarray, direction_rad: np.ndarray, still_px: float) -> np.ndarray:
-    """Bit index (0..48) of each measured value."""
-    return _codes(flow_px, direction_rad, still_px)[0]
+def flow_bin(m: np.ndarray) -> np.ndarray:
+    """Bin 0..14 of a signed normal flow; bin 7 is ``|m| < 0.4``."""
+    return np.searchsorted(FLOW_EDGES_SIGNED, m, side="right")
 
 
-def decode_bit(bit: int) -> tuple[str, int, int]:
-    """('still', -1, -1) or ('moving', direction bin, magnitude bin)."""
-    if bit == STILL_BIT:
-        return ("still", -1, -1)
-    return ("moving", bit // VALUE_MAGNITUDES, bit % VALUE_MAGNITUDES)
+def encode_value(orientation: int, flow: int) -> tuple[int, int]:
+    """(word, bit) of the value ``(orientation bin, flow bin)``."""
+    slot = orientation % SLOTS_PER_WORD
+    return orientation // SLOTS_PER_WORD, slot * SLOT_BITS + flow
 
 
-def encode_bit(direction_bin: int, magnitude_bin: int) -> int:
-    return direction_bin * VALUE_MAGNITUDES + magnitude_bin
+def decode_value(word: int, bit: int) -> tuple[int, int]:
+    """Inverse of :func:`encode_value`: (orientation bin, flow bin)."""
+    return word * SLOTS_PER_WORD + bit // SLOT_BITS, bit % SLOT_BITS
 
 
 _ONE = np.uint64(1)
+_SLOT_MASK = np.uint64((1 << SLOT_BITS) - 1)
 
 
-def candidate_bits(
-    flow_px: np.ndarray,
-    direction_rad: np.ndarray,
-    tolerance: np.ndarray,
-    still_px: float,
-    accel_bins: int,
-    accel_relative: float = 0.0,
-) -> np.ndarray:
-    """Every bit a measurement, widened by its tolerance, could have had before.
+def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
+    """Bit-encoded value of each measurement, written into its orientation
+    bin and the nearer neighbouring bin (with the sign of ``m`` flipped when
+    that neighbour is across 0/pi), so that orientations closer than half a
+    bin always share one.
 
     Returns
     -------
-    (…) ndarray of uint64
+    (2, …) ndarray of uint64
     """
-    speed = np.abs(flow_px)
-    lo = np.maximum(speed / (1 + accel_relative) - tolerance, 0.0)
-    hi = speed * (1 + accel_relative) + tolerance
-    mag_lo = np.maximum(np.searchsorted(MAGNITUDE_EDGES_PX, lo, side="right") - accel_bins, 0)
-    mag_hi = np.minimum(
-        np.searchsorted(MAGNITUDE_EDGES_PX, hi, side="right") + accel_bins, VALUE_MAGNITUDES - 1
-    )
-    mag_mask = ((_ONE << (mag_hi.astype(np.uint64) + _ONE)) - _ONE) & ~(
-        (_ONE << mag_lo.astype(np.uint64)) - _ONE
-    )
-    angle = flow_vector_angle(flow_px, direction_rad)
-    centre = np.rint(angle / (2 * np.pi / VALUE_DIRECTIONS)).astype(np.int64)
-    uncertain = lo < still_px  # direction unknown near zero: any direction
-    out = np.zeros(flow_px.shape, np.uint64)
-    for d in range(VALUE_DIRECTIONS):
-        near = (np.abs(((centre - d + 4) % VALUE_DIRECTIONS) - 4) <= 1) | uncertain
-        out |= np.where(near, mag_mask << np.uint64(d * VALUE_MAGNITUDES), np.uint64(0))
-    out |= np.where(lo < still_px, _ONE << np.uint64(STILL_BIT), np.uint64(0))
+    theta, m = oriented(flow_px, direction_rad)
+    width = np.pi / ORIENTATIONS
+    own = orientation_bin(theta)
+    step = np.where(theta - own * width >= width / 2, 1, -1)
+    other = own + step
+    across = (other < 0) | (other >= ORIENTATIONS)
+    out = np.zeros((WORDS, *np.shape(m)), np.uint64)
+    for o, value in ((own, m), (other % ORIENTATIONS, np.where(across, -m, m))):
+        k = flow_bin(value).astype(np.uint64)
+        bit = _ONE << (k + np.uint64(SLOT_BITS) * (o % SLOTS_PER_WORD).astype(np.uint64))
+        for w in range(WORDS):
+            out[w] |= np.where(o // SLOTS_PER_WORD == w, bit, np.uint64(0))
     return out
+
+
+def candidate_slots(
+    flow_px: np.ndarray,
+    direction_rad: np.ndarray,
+    tolerance: np.ndarray,
+    accel_px: float,
+    accel_relative: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Orientation bin and the flow bits a measurement could have had one
+    frame earlier under smooth motion: ``m`` widened by the noise tolerance,
+    ``accel_px`` and ``accel_relative * |m|``.
+
+    Returns
+    -------
+    orientation : (…) ndarray of int
+    bits : (…) ndarray of uint64, within a 16-bit slot
+    """
+    theta, m = oriented(flow_px, direction_rad)
+    allowance = tolerance + accel_px + accel_relative * np.abs(m)
+    lo = flow_bin(m - allowance).astype(np.uint64)
+    hi = flow_bin(m + allowance).astype(np.uint64)
+    bits = ((_ONE << (hi + _ONE)) - _ONE) & ~((_ONE << lo) - _ONE)
+    return orientation_bin(theta), bits
+
+
+def map_slot(map_: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+    """The 16 bits the constraint map holds for each cell's orientation bin."""
+    word = np.take_along_axis(map_, (orientation // SLOTS_PER_WORD)[None], axis=0)[0]
+    return (word >> (np.uint64(SLOT_BITS) * (orientation % SLOTS_PER_WORD).astype(np.uint64))) & (
+        _SLOT_MASK
+    )
 
 
 # ----------------------------------------------------------------------------
@@ -205,13 +235,15 @@ def footprint_cells(
     cell_px: tuple[float, float],
     max_speed_px: float,
     counterflow_cells: float,
+    ahead_cells: float = 0.0,
 ) -> np.ndarray:
     """Cell offsets (dy, dx) covered by one footprint (Figure 8, right).
 
     The point moved ``displacement_px`` along ``angle_rad`` and up to
     ``sqrt(max_speed^2 - displacement^2)`` either way across it; the
     footprint is that bar, extended back through the generating point by
-    ``counterflow_cells``, dilated by half a cell diagonal.
+    ``counterflow_cells`` and forward past it by ``ahead_cells``, dilated
+    by half a cell diagonal.
 
     Returns
     -------
@@ -228,7 +260,8 @@ def footprint_cells(
     half_cell = 0.5 * np.hypot(cw, ch)
     reach = np.sqrt(max(max_speed_px**2 - displacement_px**2, 0.0))
     back = counterflow_cells * max(cw, ch)
-    da = np.clip(a, -back, displacement_px) - a
+    ahead = ahead_cells * max(cw, ch)
+    da = np.clip(a, -back, displacement_px + ahead) - a
     db = np.clip(b, -reach, reach) - b
     inside = np.hypot(da, db) <= half_cell
     return np.stack([dy[inside], dx[inside]], axis=1)
@@ -236,13 +269,18 @@ def footprint_cells(
 
 @lru_cache(maxsize=16)
 def stencil_table(
-    geometry: GridGeometry, max_speed_px: float, counterflow_cells: float, still_px: float
+    geometry: GridGeometry,
+    max_speed_px: float,
+    counterflow_cells: float,
+    ahead_cells: float,
+    still_px: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Which offsets each footprint class covers.
 
-    Classes: ``dir * VALUE_MAGNITUDES + mag`` for 16 footprint directions,
-    then one "still" class. Each class uses the upper edge of its magnitude
-    bin (the footprint must reach as far as the fastest value in it).
+    Classes: ``dir * FOOTPRINT_MAGNITUDES + mag`` for 16 directions of the
+    vector ``m n``, then one "still" class. Each class uses the upper edge
+    of its magnitude bin (the footprint must reach as far as the fastest
+    value in it).
 
     Returns
     -------
@@ -253,21 +291,22 @@ def stencil_table(
     dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
     offsets = np.stack([dy.ravel(), dx.ravel()], axis=1)
     index = {tuple(o): i for i, o in enumerate(offsets)}
-    upper = np.append(MAGNITUDE_EDGES_PX, max_speed_px)
-    n_classes = FOOTPRINT_DIRECTIONS * VALUE_MAGNITUDES + 1
+    upper = np.append(FOOTPRINT_MAGNITUDE_EDGES_PX, max_speed_px)
+    n_classes = FOOTPRINT_DIRECTIONS * FOOTPRINT_MAGNITUDES + 1
     covers = np.zeros((len(offsets), n_classes), bool)
     for d in range(FOOTPRINT_DIRECTIONS):
         angle = d * 2 * np.pi / FOOTPRINT_DIRECTIONS
-        for m in range(VALUE_MAGNITUDES):
+        for m in range(FOOTPRINT_MAGNITUDES):
             cells = footprint_cells(
                 min(upper[m], max_speed_px),
                 angle,
                 geometry.cell_px,
                 max_speed_px,
                 counterflow_cells,
+                ahead_cells,
             )
             for cell in cells:
-                covers[index[tuple(cell)], d * VALUE_MAGNITUDES + m] = True
+                covers[index[tuple(cell)], d * FOOTPRINT_MAGNITUDES + m] = True
     for cell in footprint_cells(0.0, 0.0, geometry.cell_px, still_px, counterflow_cells):
         covers[index[tuple(cell)], -1] = True
     used = covers.any(axis=1)
@@ -278,34 +317,43 @@ def footprint_classes(
     flow_px: np.ndarray, direction_rad: np.ndarray, still_px: float
 ) -> np.ndarray:
     """Stencil class of each measurement (see :func:`stencil_table`)."""
-    return _codes(flow_px, direction_rad, still_px)[1]
+    angle = np.where(flow_px >= 0, direction_rad, direction_rad + np.pi)
+    speed = np.abs(flow_px)
+    mag = np.searchsorted(FOOTPRINT_MAGNITUDE_EDGES_PX, speed, side="right")
+    direction = np.rint(angle / (2 * np.pi / FOOTPRINT_DIRECTIONS)).astype(np.int64)
+    classes = (direction % FOOTPRINT_DIRECTIONS) * FOOTPRINT_MAGNITUDES + mag
+    return np.where(speed < still_px, FOOTPRINT_DIRECTIONS * FOOTPRINT_MAGNITUDES, classes)
 
 
 def shift(a: np.ndarray, dy: int, dx: int) -> np.ndarray:
-    """``out[y + dy, x + dx] = a[y, x]``, zero-filled."""
+    """``out[..., y + dy, x + dx] = a[..., y, x]``, zero-filled."""
     out = np.zeros_like(a)
-    h, w = a.shape
+    h, w = a.shape[-2:]
     ys, yd = (slice(0, h - dy), slice(dy, h)) if dy >= 0 else (slice(-dy, h), slice(0, h + dy))
     xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
-    out[yd, xd] = a[ys, xs]
+    out[..., yd, xd] = a[..., ys, xs]
     return out
 
 
 def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
-    """OR every valid cell's value bit over its footprint.
+    """OR every valid cell's value over its footprint.
 
     Returns
     -------
-    (64, 64) ndarray of uint64
+    (2, 64, 64) ndarray of uint64
     """
     offsets, covers = stencil_table(
-        field.geometry, config.max_speed_px, config.counterflow_cells, config.still_px
+        field.geometry,
+        config.max_speed_px,
+        config.counterflow_cells,
+        config.ahead_cells,
+        config.still_px,
     )
-    bits, classes = _codes(field.flow_px, field.direction_rad, config.still_px)
-    word = np.where(field.valid, _ONE << bits.astype(np.uint64), np.uint64(0))
-    out = np.zeros(word.shape, np.uint64)
+    classes = footprint_classes(field.flow_px, field.direction_rad, config.still_px)
+    words = np.where(field.valid, value_words(field.flow_px, field.direction_rad), np.uint64(0))
+    out = np.zeros(words.shape, np.uint64)
     for (dy, dx), cover in zip(offsets, covers):
-        contrib = np.where(cover[classes], word, np.uint64(0))
+        contrib = np.where(cover[classes], words, np.uint64(0))
         out |= shift(contrib, int(dy), int(dx))
     return out
 
@@ -329,6 +377,27 @@ def global_flow(field: NormalFlowField, iterations: int = 2) -> np.ndarray:
         scale = max(1.4826 * np.median(r), 0.1)
         w = np.minimum(1.0, 1.5 * scale / np.maximum(r, 1e-9))  # Huber weights
     return sol
+
+
+def entering(field: NormalFlowField, flow_px: np.ndarray, config: AnimateConfig) -> np.ndarray:
+    """Cells whose content may have been outside the frame a frame ago.
+
+    A point within ``border_cells`` cells plus its own normal flow of the
+    frame edge may have entered since the last frame, so nothing predicted
+    it: the frame edge is an occluder that every moving camera uncovers.
+
+    Returns
+    -------
+    (64, 64) ndarray of bool
+    """
+    x, y = field.geometry.cell_centres_px()
+    width, height = field.geometry.work_size
+    cw, ch = field.geometry.cell_px
+    edge = np.minimum(
+        np.minimum(x, width - x) - config.border_cells * cw,
+        np.minimum(y, height - y) - config.border_cells * ch,
+    )
+    return edge < np.abs(flow_px)
 
 
 class AnimateDetector:
@@ -370,15 +439,13 @@ class AnimateDetector:
             cfg.noise_sigmas * measurement_tolerance(field, cfg.noise_grey, 0.0),
             cfg.tolerance_floor_px,
         )
-        cand = candidate_bits(
-            flow, field.direction_rad, tol, cfg.still_px, cfg.accel_bins, cfg.accel_relative
+        orientation, cand = candidate_slots(
+            flow, field.direction_rad, tol, cfg.accel_px, cfg.accel_relative
         )
-        covered = map_ != 0
-        tested = field.valid & (field.gradient >= cfg.min_gradient)
-        b = cfg.border_cells
-        if b > 0:
-            tested[:b], tested[-b:], tested[:, :b], tested[:, -b:] = False, False, False, False
-        violation = tested & covered & ((map_ & cand) == 0)
+        allowed = map_slot(map_, orientation)
+        covered = allowed != 0
+        tested = field.valid & (field.gradient >= cfg.min_gradient) & ~entering(field, flow, cfg)
+        violation = tested & covered & ((allowed & cand) == 0)
         if cfg.first_appearance == "flag":
             violation |= tested & ~covered & (np.abs(flow) > cfg.still_px + tol)
         flagged = drop_isolated(violation, cfg.min_neighbours)

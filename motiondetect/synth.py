@@ -241,6 +241,15 @@ def camera_pose(config: SynthConfig, t: int, rng: np.random.Generator | None = N
     return pose
 
 
+def _aim_x(config: SynthConfig, depth: float) -> float:
+    """World x where the optical axis crosses the plane z = depth, mid-sequence."""
+    pose = camera_pose(config, config.frames // 2)
+    axis, centre = pose[:3, 2], pose[:3, 3]
+    if axis[2] < 0.1 or depth <= centre[2]:
+        return float(centre[0])
+    return float(centre[0] + axis[0] * (depth - centre[2]) / axis[2])
+
+
 def mover_quads(config: SynthConfig, t: int) -> list[Quad]:
     """The independent movers at frame t, as billboards facing the camera."""
     s = config.speed
@@ -260,7 +269,10 @@ def mover_quads(config: SynthConfig, t: int) -> list[Quad]:
             x = start_x - 0.01 * s * t
             y = top
         elif kind == "animate":
-            x = start_x + 0.35 * np.sin(2 * np.pi * t / config.period_frames)
+            # Oscillates about the point the camera faces mid-sequence, so
+            # that it stays in view while the camera moves.
+            centre = _aim_x(config, depth) + 0.3 * start_x
+            x = centre + 0.35 * np.sin(2 * np.pi * t / config.period_frames)
             y = top
         else:  # emerging: from behind the box at x=3.5, z=8 (its left edge at 2.5)
             depth = 9.8

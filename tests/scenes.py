@@ -13,9 +13,14 @@ from motiondetect.synth import CAMERA_CLASS, SynthConfig, render_frames
 
 
 @lru_cache(maxsize=32)
-def scene(camera: str, movers: tuple[str, ...] = (), frames: int = 24, **kw) -> tuple:
-    """Rendered frames (small, no supersampling, to keep the suite fast)."""
-    config = SynthConfig(camera=camera, movers=movers, frames=frames, supersample=1, **kw)
+def scene(
+    camera: str, movers: tuple[str, ...] = (), frames: int = 24, supersample: int = 1, **kw
+) -> tuple:
+    """Rendered frames (small; no supersampling by default, to keep the suite
+    fast). ``supersample=2`` renders edges anti-aliased, as a camera's pixels
+    integrate light: without it, sharp edges move in whole-pixel jumps that
+    the animate detector rightly sees as non-smooth motion."""
+    config = SynthConfig(camera=camera, movers=movers, frames=frames, supersample=supersample, **kw)
     return tuple(render_frames(config))
 
 
@@ -47,3 +52,29 @@ def class_accuracy(camera: str, classes: list) -> float:
     want = CAMERA_CLASS[camera]
     family = {2: (2, 3), 3: (2, 3)}.get(want, (want,))
     return float(np.mean([c in family for c in classes]))
+
+
+def object_hits(results, frames, mover: int = 1):
+    """Per frame with the mover wholly in view: (frame index, region hit,
+    pixel hit). A region hit is a reported region with at least 3 flagged
+    cells on the mover; a pixel hit is >= 10 % of its pixels flagged (the
+    ``evaluate`` object criterion)."""
+    out = []
+    for res, fr in zip(results, frames):
+        obj = fr.movers == mover
+        edge = obj[0].any() or obj[-1].any() or obj[:, 0].any() or obj[:, -1].any()
+        if res.field is None or fr.index < 2 or obj.sum() < 50 or edge:
+            continue
+        cells = cv2.resize(obj.astype(np.float32), (64, 64), interpolation=cv2.INTER_AREA) > 0.5
+        region_hit = any(cells[r.cells[:, 0], r.cells[:, 1]].sum() >= 3 for r in res.regions)
+        flag = cv2.resize(
+            res.flagged.astype(np.uint8), obj.shape[::-1], interpolation=cv2.INTER_NEAREST
+        ).astype(bool)
+        out.append((fr.index, region_hit, flag[obj].mean() >= 0.1))
+    return out
+
+
+def near_reversal(index: int, period: int) -> bool:
+    """Within 1.5 frames of an extreme of x = sin(2 pi t / period), where an
+    ``animate`` mover reverses and its acceleration peaks."""
+    return abs(index % (period / 2) - period / 4) <= 1.5
