@@ -5,23 +5,33 @@ slowly. Each valid cell at frame t-1 predicts where its world point may be
 at t (its *footprint*) and flags those cells with its motion value; at t a
 measured value that no footprint allowed is animate motion.
 
-* **Values** are coarsely bit-encoded: the normal-flow vector ``m n`` falls
-  in one of 8 direction bins x 6 magnitude bins, or the "still" bit; one bit
-  each of a 64-bit word.
+* **Values** are coarsely bit-encoded: the gradient orientation (mod pi,
+  8 bins) and the normal flow signed along it (15 bins, finer near zero),
+  16 bits per orientation, two 64-bit words per cell. A value is written in
+  its own orientation bin and the nearer neighbouring one. Keeping the
+  orientation matters: a rigid point keeps its gradient orientation from
+  frame to frame, but neighbouring texture with another orientation shows
+  another normal flow for the same motion (the aperture problem), and
+  comparing values across orientations either flags rigid texture or
+  forgives everything.
 * **Footprints** (Figure 8): with only the normal component known, the
   point moved ``m`` along ``n`` and anything up to the speed bound along the
   constraint line, so the footprint is a bar across the flow, displaced by
   the flow, extended back through and a little beyond the generating point
   (the counterflow side) so that objects emerging from behind an occluder
-  predict their own appearance.
+  predict their own appearance, and forward past the predicted position so
+  that background uncovered behind a faster occluder is predicted too.
 * **Constraint map**: the footprints' bits OR together per cell.
-* **Violations**: a measurement whose tolerance-widened candidate bits
-  share none with the map. A moving cell where no footprint landed at all
-  is a *first appearance*; ``first_appearance`` says whether to flag it.
+* **Violations**: a measurement whose candidate bits (its value widened by
+  the noise tolerance and a small smooth-change allowance) share none with
+  the map's bits for its orientation. A cell where no footprint of its
+  orientation landed is a *first appearance*; ``first_appearance`` says
+  whether to flag it. Content that may have entered the frame since the
+  last one is not tested.
 * **Jitter**: section 4.2 warns that rotational jitter breaks smoothness.
-  With ``jitter_compensation`` the frame's global flow is estimated, and its
-  change since the previous frame is removed from the measurements and the
-  map is shifted by it.
+  With ``jitter_compensation`` the frame's global shift is estimated as the
+  median over 4x4 blocks of the change of each block's uniform flow; it is
+  removed from the measurements and the map is shifted by it.
 """
 
 from __future__ import annotations
@@ -351,32 +361,60 @@ def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
     )
     classes = footprint_classes(field.flow_px, field.direction_rad, config.still_px)
     words = np.where(field.valid, value_words(field.flow_px, field.direction_rad), np.uint64(0))
-    out = np.zeros(words.shape, np.uint64)
-    for (dy, dx), cover in zip(offsets, covers):
-        contrib = np.where(cover[classes], words, np.uint64(0))
-        out |= shift(contrib, int(dy), int(dx))
-    return out
+    # Accumulate into a frame padded by the stencil radius: each offset is one
+    # in-place OR of a slice, with no shifted copies.
+    r = STENCIL_RADIUS
+    h, w = classes.shape
+    out = np.zeros((WORDS, h + 2 * r, w + 2 * r), np.uint64)
+    gates = np.where(covers, ~np.uint64(0), np.uint64(0))[:, classes]  # (O, h, w): all ones or 0
+    for (dy, dx), gate in zip(offsets, gates):
+        out[:, r + dy : r + dy + h, r + dx : r + dx + w] |= words & gate
+    return out[:, r:-r, r:-r].copy()
 
 
-def global_flow(field: NormalFlowField, iterations: int = 2) -> np.ndarray:
-    """Robust least-squares uniform flow (vx, vy) explaining the normal flow."""
-    nx, ny = field.normal
-    v = field.valid
-    if v.sum() < 16:
+JITTER_BLOCKS = 4
+
+
+def block_flows(field: NormalFlowField, blocks: int = JITTER_BLOCKS) -> np.ndarray:
+    """Least-squares uniform flow (vx, vy) of each of ``blocks x blocks``
+    blocks, from ``m = v . n`` over its valid cells; NaN where a block has too
+    few cells or too narrow a spread of gradient orientations to fix both
+    components.
+
+    Returns
+    -------
+    (blocks, blocks, 2) ndarray of float64
+    """
+    nx, ny = (np.asarray(c, np.float64) for c in field.normal)
+    w = field.valid.astype(np.float64)
+    m = field.flow_px.astype(np.float64) * w
+    h, wd = w.shape
+
+    def per_block(a: np.ndarray) -> np.ndarray:
+        return a.reshape(blocks, h // blocks, blocks, wd // blocks).sum(axis=(1, 3))
+
+    sxx, sxy, syy = per_block(nx * nx * w), per_block(nx * ny * w), per_block(ny * ny * w)
+    bx, by, count = per_block(nx * m), per_block(ny * m), per_block(w)
+    det = sxx * syy - sxy * sxy
+    ok = (count >= 16) & (det > 0.1 * np.maximum(count, 1) ** 2 / 4)
+    safe = np.where(ok, det, 1.0)
+    vx = (syy * bx - sxy * by) / safe
+    vy = (sxx * by - sxy * bx) / safe
+    return np.where(ok[..., None], np.stack([vx, vy], axis=-1), np.nan)
+
+
+def jitter_shift(previous: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """The frame's global image shift since the previous one, (dx, dy) px.
+
+    Rotational jitter adds the same shift to every block's flow, while smooth
+    observer motion changes each block's flow slowly; the median over blocks
+    of the change keeps a mover in a few blocks from dragging the estimate.
+    """
+    change = (current - previous).reshape(-1, 2)
+    change = change[np.isfinite(change).all(axis=1)]
+    if len(change) < 4:
         return np.zeros(2)
-    n = np.stack([nx[v], ny[v]], axis=1).astype(np.float64)
-    m = field.flow_px[v].astype(np.float64)
-    w = np.ones_like(m)
-    sol = np.zeros(2)
-    for _ in range(iterations):
-        a = (n * w[:, None]).T @ n
-        if np.linalg.det(a) < 1e-6:
-            break
-        sol = np.linalg.solve(a, (n * w[:, None]).T @ m)
-        r = np.abs(n @ sol - m)
-        scale = max(1.4826 * np.median(r), 0.1)
-        w = np.minimum(1.0, 1.5 * scale / np.maximum(r, 1e-9))  # Huber weights
-    return sol
+    return np.median(change, axis=0)
 
 
 def entering(field: NormalFlowField, flow_px: np.ndarray, config: AnimateConfig) -> np.ndarray:
@@ -422,9 +460,9 @@ class AnimateDetector:
         flow = field.flow_px
         extra: dict = {}
         map_, previous_global = self._map, self._global
-        current_global = global_flow(field) if cfg.jitter_compensation else None
+        current_global = block_flows(field) if cfg.jitter_compensation else None
         if cfg.jitter_compensation and previous_global is not None and map_ is not None:
-            delta = current_global - previous_global
+            delta = jitter_shift(previous_global, current_global)
             nx, ny = field.normal
             flow = flow - (delta[0] * nx + delta[1] * ny).astype(np.float32)
             cw, ch = field.geometry.cell_px

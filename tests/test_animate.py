@@ -139,21 +139,33 @@ def test_content_that_may_have_entered_the_frame_is_not_tested():
     assert slow[:, :2].all() and not slow[2:-2, 2:-2].any()
 
 
-def test_global_flow_recovers_a_uniform_shift():
+def test_jitter_shift_is_the_blocks_common_change_and_ignores_a_mover():
     rng = np.random.default_rng(3)
     theta = rng.uniform(-np.pi, np.pi, (64, 64)).astype(np.float32)
-    v = np.array([1.5, -0.7])
-    m = (v[0] * np.cos(theta) + v[1] * np.sin(theta)).astype(np.float32)
-    m[:8] = 9.0  # a mover must not drag it
-    field = NormalFlowField(
-        m,
-        theta,
-        np.full((64, 64), 20.0, np.float32),
-        np.ones((64, 64), bool),
-        np.zeros((64, 64), np.uint8),
-        SQUARE,
-    )
-    np.testing.assert_allclose(an.global_flow(field), v, atol=0.05)
+    yy, xx = np.mgrid[0:64, 0:64]
+    smooth = np.stack([0.03 * (xx - 32), 0.02 * (yy - 32)])  # an expanding field
+    jitter = np.array([1.5, -0.7])
+
+    def field(flow: np.ndarray) -> NormalFlowField:
+        m = (flow[0] * np.cos(theta) + flow[1] * np.sin(theta)).astype(np.float32)
+        return NormalFlowField(
+            m,
+            theta,
+            np.full((64, 64), 20.0, np.float32),
+            np.ones((64, 64), bool),
+            np.zeros((64, 64), np.uint8),
+            SQUARE,
+        )
+
+    before = an.block_flows(field(smooth))
+    np.testing.assert_allclose(before[0, 0], smooth[:, 8, 8].T, atol=0.3)
+    moved = smooth + jitter[:, None, None]
+    moved[:, :20, :20] += np.array([9.0, 4.0])[:, None, None]  # a mover in a few blocks
+    after = an.block_flows(field(moved))
+    np.testing.assert_allclose(an.jitter_shift(before, after), jitter, atol=0.05)
+    # too few blocks with both components fixed: no estimate
+    blank = np.full_like(before, np.nan)
+    np.testing.assert_array_equal(an.jitter_shift(blank, after), [0.0, 0.0])
 
 
 # --- Synthetic scenes ---------------------------------------------------------
