@@ -42,8 +42,9 @@ from typing import Literal
 
 import numpy as np
 
-from .constraint_ray import DetectorOutput
+from .constraint_ray import DetectorOutput, fold_direction
 from .hough import measurement_tolerance
+from .luts import BinTable
 from .pipeline import GridGeometry, NormalFlowField
 from .regions import drop_isolated, find_regions
 
@@ -63,6 +64,7 @@ FOOTPRINT_DIRECTIONS = 16
 FOOTPRINT_MAGNITUDE_EDGES_PX = np.array([0.6, 1.2, 2.4, 4.8, 9.6])
 FOOTPRINT_MAGNITUDES = len(FOOTPRINT_MAGNITUDE_EDGES_PX) + 1
 STENCIL_RADIUS = 4  # cells
+_footprint_magnitude = BinTable(FOOTPRINT_MAGNITUDE_EDGES_PX, step=0.1, limit=10.0)
 
 
 @dataclass(frozen=True)
@@ -141,25 +143,13 @@ class AnimateConfig:
 # ----------------------------------------------------------------------------
 
 
-def oriented(flow_px: np.ndarray, direction_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Gradient orientation in [0, pi) and the normal flow signed along it.
-
-    ``(theta, m)`` and ``(theta + pi, -m)`` are the same measurement.
-    """
-    theta = np.asarray(direction_rad, np.float64)
-    m = np.asarray(flow_px, np.float64)
-    flip = (theta < 0) | (theta >= np.pi)
-    return np.mod(theta, np.pi), np.where(flip, -m, m)
-
-
 def orientation_bin(theta: np.ndarray) -> np.ndarray:
     """Bin 0..7 of an orientation in [0, pi)."""
     return np.floor(theta / (np.pi / ORIENTATIONS)).astype(np.int64) % ORIENTATIONS
 
 
-def flow_bin(m: np.ndarray) -> np.ndarray:
-    """Bin 0..14 of a signed normal flow; bin 7 is ``|m| < 0.4``."""
-    return np.searchsorted(FLOW_EDGES_SIGNED, m, side="right")
+#: Bin 0..14 of a signed normal flow; bin 7 is ``|m| < 0.4``.
+flow_bin = BinTable(FLOW_EDGES_SIGNED, step=0.1, limit=10.0)
 
 
 def encode_value(orientation: int, flow: int) -> tuple[int, int]:
@@ -187,7 +177,7 @@ def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
     -------
     (2, …) ndarray of uint64
     """
-    theta, m = oriented(flow_px, direction_rad)
+    theta, m = fold_direction(direction_rad, flow_px)
     width = np.pi / ORIENTATIONS
     own = orientation_bin(theta)
     step = np.where(theta - own * width >= width / 2, 1, -1)
@@ -195,10 +185,10 @@ def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
     across = (other < 0) | (other >= ORIENTATIONS)
     out = np.zeros((WORDS, *np.shape(m)), np.uint64)
     for o, value in ((own, m), (other % ORIENTATIONS, np.where(across, -m, m))):
-        k = flow_bin(value).astype(np.uint64)
-        bit = _ONE << (k + np.uint64(SLOT_BITS) * (o % SLOTS_PER_WORD).astype(np.uint64))
+        index = o * SLOT_BITS + flow_bin(value)  # 0..127 over the two words
+        bit = _ONE << (index % 64).astype(np.uint64)
         for w in range(WORDS):
-            out[w] |= np.where(o // SLOTS_PER_WORD == w, bit, np.uint64(0))
+            out[w] |= np.where(index // 64 == w, bit, np.uint64(0))
     return out
 
 
@@ -218,7 +208,7 @@ def candidate_slots(
     orientation : (…) ndarray of int
     bits : (…) ndarray of uint64, within a 16-bit slot
     """
-    theta, m = oriented(flow_px, direction_rad)
+    theta, m = fold_direction(direction_rad, flow_px)
     allowance = tolerance + accel_px + accel_relative * np.abs(m)
     lo = flow_bin(m - allowance).astype(np.uint64)
     hi = flow_bin(m + allowance).astype(np.uint64)
@@ -329,7 +319,7 @@ def footprint_classes(
     """Stencil class of each measurement (see :func:`stencil_table`)."""
     angle = np.where(flow_px >= 0, direction_rad, direction_rad + np.pi)
     speed = np.abs(flow_px)
-    mag = np.searchsorted(FOOTPRINT_MAGNITUDE_EDGES_PX, speed, side="right")
+    mag = _footprint_magnitude(speed)
     direction = np.rint(angle / (2 * np.pi / FOOTPRINT_DIRECTIONS)).astype(np.int64)
     classes = (direction % FOOTPRINT_DIRECTIONS) * FOOTPRINT_MAGNITUDES + mag
     return np.where(speed < still_px, FOOTPRINT_DIRECTIONS * FOOTPRINT_MAGNITUDES, classes)
@@ -366,9 +356,11 @@ def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
     r = STENCIL_RADIUS
     h, w = classes.shape
     out = np.zeros((WORDS, h + 2 * r, w + 2 * r), np.uint64)
-    gates = np.where(covers, ~np.uint64(0), np.uint64(0))[:, classes]  # (O, h, w): all ones or 0
-    for (dy, dx), gate in zip(offsets, gates):
-        out[:, r + dy : r + dy + h, r + dx : r + dx + w] |= words & gate
+    part = np.empty_like(words)
+    for (dy, dx), cover in zip(offsets, covers):
+        target = out[:, r + dy : r + dy + h, r + dx : r + dx + w]
+        np.multiply(words, cover[classes], out=part)  # the words of the classes covering it
+        np.bitwise_or(target, part, out=target)
     return out[:, r:-r, r:-r].copy()
 
 
@@ -389,12 +381,9 @@ def block_flows(field: NormalFlowField, blocks: int = JITTER_BLOCKS) -> np.ndarr
     w = field.valid.astype(np.float64)
     m = field.flow_px.astype(np.float64) * w
     h, wd = w.shape
-
-    def per_block(a: np.ndarray) -> np.ndarray:
-        return a.reshape(blocks, h // blocks, blocks, wd // blocks).sum(axis=(1, 3))
-
-    sxx, sxy, syy = per_block(nx * nx * w), per_block(nx * ny * w), per_block(ny * ny * w)
-    bx, by, count = per_block(nx * m), per_block(ny * m), per_block(w)
+    terms = np.stack([nx * nx * w, nx * ny * w, ny * ny * w, nx * m, ny * m, w])
+    sums = terms.reshape(6, blocks, h // blocks, blocks, wd // blocks).sum(axis=(2, 4))
+    sxx, sxy, syy, bx, by, count = sums
     det = sxx * syy - sxy * sxy
     ok = (count >= 16) & (det > 0.1 * np.maximum(count, 1) ** 2 / 4)
     safe = np.where(ok, det, 1.0)

@@ -29,6 +29,7 @@ from typing import Literal
 import numpy as np
 
 from .hough import CoarseField, coarse_field, measurement_tolerance
+from .luts import BinTable
 from .observer_motion import ObserverMotion, classify, constraint_model
 from .pipeline import NormalFlowField
 from .regions import Region, drop_isolated, find_regions
@@ -42,6 +43,7 @@ _POSITIVE_EDGES = np.array(
 #: Edges of the 32 signed normal-flow bins, work px/frame.
 MAGNITUDE_EDGES = np.concatenate([[-np.inf], -_POSITIVE_EDGES[:0:-1], _POSITIVE_EDGES, [np.inf]])
 MAGNITUDE_BINS = len(MAGNITUDE_EDGES) - 1  # 32
+_magnitude_bin = BinTable(MAGNITUDE_EDGES, step=0.125, limit=9.0)
 
 
 # ----------------------------------------------------------------------------
@@ -108,8 +110,8 @@ def disk_and_half_plane(point: np.ndarray, v1: np.ndarray, direction: np.ndarray
 
 def encode_interval(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Bit mask (uint32) of the magnitude bins that ``[lo, hi]`` touches."""
-    first = np.clip(np.searchsorted(MAGNITUDE_EDGES, lo, side="right") - 1, 0, MAGNITUDE_BINS - 1)
-    last = np.clip(np.searchsorted(MAGNITUDE_EDGES, hi, side="right") - 1, 0, MAGNITUDE_BINS - 1)
+    first = np.clip(_magnitude_bin(lo) - 1, 0, MAGNITUDE_BINS - 1)
+    last = np.clip(_magnitude_bin(hi) - 1, 0, MAGNITUDE_BINS - 1)
     one = np.uint64(1)
     upto_last = (one << (last.astype(np.uint64) + one)) - one
     below_first = (one << first.astype(np.uint64)) - one

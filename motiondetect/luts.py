@@ -139,3 +139,35 @@ def normal_flow_lut(
     valid = raw != FLOW_INVALID
     flow = np.where(valid, raw.astype(np.float32) * np.float32(FLOW_UNIT), np.float32(0.0))
     return flow, valid
+
+
+class BinTable:
+    """``np.searchsorted(edges, x, side="right")`` by one table lookup.
+
+    For bin edges that lie on a grid of ``step`` (plus optional infinite
+    ends): every ``x`` in ``[k step, (k + 1) step)`` falls in the same bin,
+    so the bin is a table entry indexed by ``floor(x / step)``. Beyond
+    ``+-limit`` finite values saturate; infinities and NaN land where
+    ``searchsorted`` puts them.
+    """
+
+    def __init__(self, edges: np.ndarray, step: float, limit: float) -> None:
+        finite = np.asarray(edges)[np.isfinite(edges)]
+        on_grid = np.abs(finite / step - np.rint(finite / step)) < 1e-9
+        if not on_grid.all() or np.abs(finite).max() >= limit:
+            raise ValueError("edges must lie on the step grid, inside +-limit")
+        self.scale = 1.0 / step
+        self.range = int(np.ceil(limit / step))
+        centres = (np.arange(-self.range, self.range + 1) + 0.5) * step
+        centres = np.append(centres, np.inf)
+        self.table = np.searchsorted(edges, centres, side="right").astype(np.int64)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        index = np.floor(np.asarray(x) * self.scale)
+        # finite values saturate; +inf and NaN (which sorts last) take the extra entry
+        index = np.where(
+            np.isfinite(index) | (index < 0),
+            np.clip(index, -self.range, self.range),
+            self.range + 1,
+        )
+        return self.table[index.astype(np.int64) + self.range]

@@ -202,3 +202,22 @@ def test_working_size_keeps_aspect_and_minimum():
     assert stages.working_size(1000, 64, 512) == (1000, 64)
     with pytest.raises(ValueError, match="work_size"):
         stages.working_size(100, 100, 10)
+
+
+def test_bin_table_equals_searchsorted():
+    from motiondetect.constraint_ray import MAGNITUDE_EDGES
+    from motiondetect.luts import BinTable
+
+    table = BinTable(MAGNITUDE_EDGES, step=0.125, limit=9.0)
+    edges = MAGNITUDE_EDGES[1:-1]
+    x = np.concatenate(
+        [
+            np.random.default_rng(0).uniform(-12, 12, 10000),
+            edges,
+            np.nextafter(edges, -np.inf),
+            [np.inf, -np.inf, np.nan, 1e30, -1e30],
+        ]
+    )
+    np.testing.assert_array_equal(table(x), np.searchsorted(MAGNITUDE_EDGES, x, side="right"))
+    with pytest.raises(ValueError, match="grid"):
+        BinTable(np.array([0.0, 0.3]), step=0.125, limit=9.0)
