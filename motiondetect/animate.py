@@ -165,6 +165,10 @@ def decode_value(word: int, bit: int) -> tuple[int, int]:
 
 _ONE = np.uint64(1)
 _SLOT_MASK = np.uint64((1 << SLOT_BITS) - 1)
+#: (2, 128): the two words with only bit i set, for i in 0..127.
+_ONE_HOT = np.array(
+    [[(1 << i) & (2**64 - 1), (1 << i) >> 64] for i in range(WORDS * 64)], np.uint64
+).T.copy()
 
 
 def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
@@ -183,13 +187,9 @@ def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
     step = np.where(theta - own * width >= width / 2, 1, -1)
     other = own + step
     across = (other < 0) | (other >= ORIENTATIONS)
-    out = np.zeros((WORDS, *np.shape(m)), np.uint64)
-    for o, value in ((own, m), (other % ORIENTATIONS, np.where(across, -m, m))):
-        index = o * SLOT_BITS + flow_bin(value)  # 0..127 over the two words
-        bit = _ONE << (index % 64).astype(np.uint64)
-        for w in range(WORDS):
-            out[w] |= np.where(index // 64 == w, bit, np.uint64(0))
-    return out
+    first = own * SLOT_BITS + flow_bin(m)  # bit 0..127 over the two words
+    second = (other % ORIENTATIONS) * SLOT_BITS + flow_bin(np.where(across, -m, m))
+    return np.take(_ONE_HOT, first, axis=1) | np.take(_ONE_HOT, second, axis=1)
 
 
 def candidate_slots(
