@@ -30,6 +30,24 @@ ROOT = Path(__file__).resolve().parents[1]
 FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 
+def draw_normal_flow(img: np.ndarray, field, step: int = 2) -> None:
+    """Arrows m*n x3 of every ``step``-th cell, in place (yellow: fine level,
+    blue: coarse level)."""
+    h, w = img.shape[:2]
+    sx, sy = w / 64, h / 64
+    nx, ny = field.normal
+    scale = 3.0 * w / field.geometry.work_size[0]
+    for r in range(1, 63, step):
+        for c in range(1, 63, step):
+            if not field.valid[r, c]:
+                continue
+            m = float(field.flow_px[r, c])
+            p0 = (int((c + 0.5) * sx), int((r + 0.5) * sy))
+            p1 = (int(p0[0] + m * nx[r, c] * scale), int(p0[1] + m * ny[r, c] * scale))
+            colour = (80, 220, 255) if field.level[r, c] == 0 else (255, 160, 60)
+            cv2.arrowedLine(img, p0, p1, colour, 1, cv2.LINE_AA, tipLength=0.3)
+
+
 def normal_flow_figure(frames: list[np.ndarray], title: str) -> np.ndarray:
     """The 64x64 normal flow of one frame pair as arrows m*n on the frame."""
     pipe = NormalFlowPipeline()
@@ -40,18 +58,7 @@ def normal_flow_figure(frames: list[np.ndarray], title: str) -> np.ndarray:
     size = annotated_size(img.shape[1], img.shape[0], 768)
     img = cv2.resize(img, size, interpolation=cv2.INTER_AREA)
     img = (img * 0.6).astype(np.uint8)
-    sx, sy = size[0] / 64, size[1] / 64
-    nx, ny = field.normal
-    for r in range(1, 63, 2):
-        for c in range(1, 63, 2):
-            if not field.valid[r, c]:
-                continue
-            m = float(field.flow_px[r, c])
-            scale = 3.0 * size[0] / field.geometry.work_size[0]
-            p0 = (int((c + 0.5) * sx), int((r + 0.5) * sy))
-            p1 = (int(p0[0] + m * nx[r, c] * scale), int(p0[1] + m * ny[r, c] * scale))
-            colour = (80, 220, 255) if field.level[r, c] == 0 else (255, 160, 60)
-            cv2.arrowedLine(img, p0, p1, colour, 1, cv2.LINE_AA, tipLength=0.3)
+    draw_normal_flow(img, field)
     cv2.putText(img, title, (8, 20), FONT, 0.55, (255, 255, 255), 1, cv2.LINE_AA)
     cv2.putText(
         img,
@@ -148,7 +155,12 @@ def first_frames(path: Path, count: int, skip: int = 0) -> list[np.ndarray]:
     return out
 
 
-def detection_figure(path: Path, at: int, detector: str = "both", egomotion=None) -> np.ndarray:
+def detection_figure(
+    path: Path, at: int, detector: str = "both", egomotion=None, withhold_pixels: bool = False
+) -> np.ndarray:
+    """Frame ``at`` annotated with the detections. With ``withhold_pixels``
+    the footage is replaced by a grey canvas carrying only what the detector
+    saw (its normal flow), for clips whose pixels may not be redistributed."""
     md = MotionDetector(detector, egomotion=egomotion)
     with open_source(path) as source:
         for frame in source:
@@ -156,7 +168,13 @@ def detection_figure(path: Path, at: int, detector: str = "both", egomotion=None
             if frame.index == at:
                 img = to_display(frame.image)
                 size = annotated_size(img.shape[1], img.shape[0], 640)
-                return annotate(img, result, size)
+                if not withhold_pixels:
+                    return annotate(img, result, size)
+                grow = max(1.0, 640 / size[0])
+                size = (round(size[0] * grow), round(size[1] * grow))
+                out = annotate(np.full_like(img, 70), result, size)
+                draw_normal_flow(out, result.field)
+                return out
     raise ValueError(f"{path} has fewer than {at + 1} frames")
 
 
@@ -176,6 +194,10 @@ def main() -> None:
         cv2.imwrite(
             str(args.out / "clip_detection_animate.png"),
             detection_figure(args.clip, args.frame, "animate"),
+        )
+        cv2.imwrite(
+            str(args.out / "clip_detection_animate_flow_only.png"),
+            detection_figure(args.clip, args.frame, "animate", withhold_pixels=True),
         )
         return
     photo = data.astronaut()
@@ -209,6 +231,12 @@ def main() -> None:
         str(args.out / "detection_handheld_animate.png"),
         detection_figure(samples / "handheld_emerging" / "video.mp4", 25, "animate"),
     )
+    woman = ROOT.parent / "shared" / "data" / "woman" / "woman.mp4"
+    if woman.exists():  # a real clip; its pixels are withheld (not ours to redistribute)
+        cv2.imwrite(
+            str(args.out / "real_woman_animate_flow_only.png"),
+            detection_figure(woman, 120, "animate", withhold_pixels=True),
+        )
 
 
 if __name__ == "__main__":
