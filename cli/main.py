@@ -139,12 +139,12 @@ def _d(key: str) -> str:
 @click.option(
     "--first-appearance",
     type=click.Choice(["ignore", "flag"]),
-    help=f"Animate detector: motion with no footprint {_d('first_appearance')}.",
+    help=f"Animate detector: motion no footprint predicted {_d('first_appearance')}.",
 )
 @click.option(
     "--jitter-compensation/--no-jitter-compensation",
     default=None,
-    help="Animate detector: remove frame-to-frame global flow changes (on).",
+    help="Animate detector: remove the frame's global jitter shift (on).",
 )
 @click.option("--min-event-frames", type=int, help=f"Shortest event {_d('min_event_frames')}.")
 @click.option("--merge-gap-frames", type=int, help=f"Gap bridged {_d('merge_gap_frames')}.")
