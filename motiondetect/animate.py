@@ -430,7 +430,7 @@ def entering(field: NormalFlowField, flow_px: np.ndarray, config: AnimateConfig)
 class AnimateDetector:
     """Flags motion that breaks the smooth continuation of the previous frame's.
 
-    State: the previous frame's constraint map and global flow.
+    State: the previous frame's constraint map and per-block uniform flows.
     """
 
     name = NAME
@@ -438,27 +438,27 @@ class AnimateDetector:
     def __init__(self, config: AnimateConfig | None = None) -> None:
         self.config = config or AnimateConfig()
         self._map: np.ndarray | None = None
-        self._global: np.ndarray | None = None
+        self._blocks: np.ndarray | None = None
 
     def reset(self) -> None:
-        self._map, self._global = None, None
+        self._map, self._blocks = None, None
 
     def process(self, field: NormalFlowField, frame_index: int = 0) -> DetectorOutput:
         cfg = self.config
         shape = field.flow_px.shape
         flow = field.flow_px
         extra: dict = {}
-        map_, previous_global = self._map, self._global
-        current_global = block_flows(field) if cfg.jitter_compensation else None
-        if cfg.jitter_compensation and previous_global is not None and map_ is not None:
-            delta = jitter_shift(previous_global, current_global)
+        map_, previous_blocks = self._map, self._blocks
+        current_blocks = block_flows(field) if cfg.jitter_compensation else None
+        if cfg.jitter_compensation and previous_blocks is not None and map_ is not None:
+            delta = jitter_shift(previous_blocks, current_blocks)
             nx, ny = field.normal
             flow = flow - (delta[0] * nx + delta[1] * ny).astype(np.float32)
             cw, ch = field.geometry.cell_px
             map_ = shift(map_, int(np.rint(delta[1] / ch)), int(np.rint(delta[0] / cw)))
             extra["jitter_px"] = [round(float(delta[0]), 3), round(float(delta[1]), 3)]
         self._map = constraint_map(field, cfg)
-        self._global = current_global
+        self._blocks = current_blocks
         empty = np.zeros(shape, bool)
         if map_ is None:
             return DetectorOutput(empty, empty.astype(np.float32), [], extra=extra)
