@@ -42,7 +42,7 @@ from typing import Literal
 
 import numpy as np
 
-from .constraint_ray import DetectorOutput, fold_direction
+from .constraint_ray import DIRECTION_BINS, DetectorOutput, direction_bin
 from .hough import measurement_tolerance
 from .luts import BinTable
 from .pipeline import GridGeometry, NormalFlowField
@@ -144,8 +144,8 @@ class AnimateConfig:
 
 
 def orientation_bin(theta: np.ndarray) -> np.ndarray:
-    """Bin 0..7 of an orientation in [0, pi)."""
-    return np.floor(theta / (np.pi / ORIENTATIONS)).astype(np.int64) % ORIENTATIONS
+    """Bin 0..7 of an orientation in [0, pi): pairs of the filter's 16 bins."""
+    return direction_bin(theta) // (DIRECTION_BINS // ORIENTATIONS)
 
 
 #: Bin 0..14 of a signed normal flow; bin 7 is ``|m| < 0.4``.
@@ -171,17 +171,22 @@ _ONE_HOT = np.array(
 ).T.copy()
 
 
-def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
+def value_words(theta: np.ndarray, m: np.ndarray) -> np.ndarray:
     """Bit-encoded value of each measurement, written into its orientation
     bin and the nearer neighbouring bin (with the sign of ``m`` flipped when
     that neighbour is across 0/pi), so that orientations closer than half a
     bin always share one.
 
+    Parameters
+    ----------
+    theta, m : ndarray
+        Folded measurements: orientation in [0, pi) and the normal flow
+        signed along it (:func:`motiondetect.pipeline.fold_direction`).
+
     Returns
     -------
     (2, …) ndarray of uint64
     """
-    theta, m = fold_direction(direction_rad, flow_px)
     width = np.pi / ORIENTATIONS
     own = orientation_bin(theta)
     step = np.where(theta - own * width >= width / 2, 1, -1)
@@ -193,22 +198,22 @@ def value_words(flow_px: np.ndarray, direction_rad: np.ndarray) -> np.ndarray:
 
 
 def candidate_slots(
-    flow_px: np.ndarray,
-    direction_rad: np.ndarray,
+    theta: np.ndarray,
+    m: np.ndarray,
     tolerance: np.ndarray,
     accel_px: float,
     accel_relative: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Orientation bin and the flow bits a measurement could have had one
     frame earlier under smooth motion: ``m`` widened by the noise tolerance,
-    ``accel_px`` and ``accel_relative * |m|``.
+    ``accel_px`` and ``accel_relative * |m|``. ``theta, m`` are folded, as
+    for :func:`value_words`.
 
     Returns
     -------
     orientation : (…) ndarray of int
     bits : (…) ndarray of uint64, within a 16-bit slot
     """
-    theta, m = fold_direction(direction_rad, flow_px)
     allowance = tolerance + accel_px + accel_relative * np.abs(m)
     lo = flow_bin(m - allowance).astype(np.uint64)
     hi = flow_bin(m + allowance).astype(np.uint64)
@@ -350,7 +355,8 @@ def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
         config.still_px,
     )
     classes = footprint_classes(field.flow_px, field.direction_rad, config.still_px)
-    words = np.where(field.valid, value_words(field.flow_px, field.direction_rad), np.uint64(0))
+    theta, sign = field.orientation
+    words = np.where(field.valid, value_words(theta, sign * field.flow_px), np.uint64(0))
     # Accumulate into a frame padded by the stencil radius: each offset is one
     # in-place OR of a slice, with no shifted copies.
     r = STENCIL_RADIUS
@@ -406,6 +412,21 @@ def jitter_shift(previous: np.ndarray, current: np.ndarray) -> np.ndarray:
     return np.median(change, axis=0)
 
 
+@lru_cache(maxsize=16)
+def _room_inside(geometry: GridGeometry, border_cells: int) -> np.ndarray:
+    """Each cell centre's distance to the frame edge less the border, work px
+    (fixed per geometry, so computed once)."""
+    x, y = geometry.cell_centres_px()
+    width, height = geometry.work_size
+    cw, ch = geometry.cell_px
+    room = np.minimum(
+        np.minimum(x, width - x) - border_cells * cw,
+        np.minimum(y, height - y) - border_cells * ch,
+    )
+    room.flags.writeable = False
+    return room
+
+
 def entering(field: NormalFlowField, flow_px: np.ndarray, config: AnimateConfig) -> np.ndarray:
     """Cells whose content may have been outside the frame a frame ago.
 
@@ -417,13 +438,7 @@ def entering(field: NormalFlowField, flow_px: np.ndarray, config: AnimateConfig)
     -------
     (64, 64) ndarray of bool
     """
-    x, y = field.geometry.cell_centres_px()
-    width, height = field.geometry.work_size
-    cw, ch = field.geometry.cell_px
-    edge = np.minimum(
-        np.minimum(x, width - x) - config.border_cells * cw,
-        np.minimum(y, height - y) - config.border_cells * ch,
-    )
+    edge = _room_inside(field.geometry, config.border_cells)
     return edge < np.abs(flow_px)
 
 
@@ -466,8 +481,9 @@ class AnimateDetector:
             cfg.noise_sigmas * measurement_tolerance(field, cfg.noise_grey, 0.0),
             cfg.tolerance_floor_px,
         )
+        theta, sign = field.orientation
         orientation, cand = candidate_slots(
-            flow, field.direction_rad, tol, cfg.accel_px, cfg.accel_relative
+            theta, sign * flow, tol, cfg.accel_px, cfg.accel_relative
         )
         allowed = map_slot(map_, orientation)
         covered = allowed != 0

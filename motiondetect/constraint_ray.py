@@ -124,15 +124,8 @@ def decode_mask(mask: int) -> tuple[float, float]:
     return float(MAGNITUDE_EDGES[bits[0]]), float(MAGNITUDE_EDGES[bits[-1] + 1])
 
 
-def fold_direction(direction_rad: np.ndarray, flow_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Map (theta, m) to the equivalent (theta', m') with theta' in [0, pi)."""
-    flip = direction_rad < 0
-    theta = np.where(flip, direction_rad + np.pi, direction_rad)
-    theta = np.where(theta >= np.pi, theta - np.pi, theta)
-    return theta, np.where(flip, -flow_px, flow_px)
-
-
 def direction_bin(theta: np.ndarray) -> np.ndarray:
+    """Bin 0..15 of an orientation in [0, pi)."""
     return np.minimum((theta * (DIRECTION_BINS / np.pi)).astype(np.intp), DIRECTION_BINS - 1)
 
 
@@ -179,7 +172,8 @@ def check_measurements(
     -------
     flagged : (64, 64) ndarray of bool
     """
-    theta, m = fold_direction(field.direction_rad, field.flow_px)
+    theta, sign = field.orientation
+    m = sign * field.flow_px
     allowed = filter_bits(model, direction_bin(theta))
     measured = encode_interval(m - tolerance, m + tolerance)
     return field.valid & ((allowed & measured) == 0)

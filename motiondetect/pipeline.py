@@ -148,6 +148,37 @@ class NormalFlowField:
         """Unit gradient direction (nx, ny), each (64, 64) float32 (computed once)."""
         return np.cos(self.direction_rad), np.sin(self.direction_rad)
 
+    @cached_property
+    def orientation(self) -> tuple[np.ndarray, np.ndarray]:
+        """(theta, sign): the gradient orientation folded into [0, pi) and
+        +-1 such that ``(theta, sign * flow_px)`` is the same measurement.
+        Computed once per frame and shared by both detectors."""
+        return fold_orientation(self.direction_rad)
+
+
+def fold_orientation(direction_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Fold gradient directions into orientations in [0, pi).
+
+    ``(n, m)`` and ``(-n, -m)`` are the same measurement, so a direction
+    outside [0, pi) turns by pi and its normal flow changes sign.
+
+    Returns
+    -------
+    theta : ndarray, like ``direction_rad``
+    sign : ndarray of +-1, like ``direction_rad``
+    """
+    d = np.asarray(direction_rad)
+    below, above = d < 0, d >= np.pi
+    theta = np.where(below, d + np.pi, np.where(above, d - np.pi, d))
+    sign = np.where(below | above, -1, 1).astype(d.dtype if d.dtype.kind == "f" else np.float64)
+    return theta, sign
+
+
+def fold_direction(direction_rad: np.ndarray, flow_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Map (direction, m) to the equivalent (theta, m') with theta in [0, pi)."""
+    theta, sign = fold_orientation(direction_rad)
+    return theta, sign * flow_px
+
 
 def measure_level(
     previous: np.ndarray,

@@ -7,7 +7,7 @@ import pytest
 
 from motiondetect import animate as an
 from motiondetect.animate import AnimateConfig
-from motiondetect.pipeline import GridGeometry, NormalFlowField
+from motiondetect.pipeline import GridGeometry, NormalFlowField, fold_direction
 
 from .scenes import near_reversal, object_hits, run_detector, scene
 
@@ -37,6 +37,11 @@ def test_footprint_bar_spans_the_constraint_line():
     assert (0, 2) not in {tuple(c) for c in cells}
 
 
+def words_of(m, direction) -> np.ndarray:
+    """Value words of a raw measurement (normal flow m along ``direction``)."""
+    return an.value_words(*fold_direction(np.asarray(direction), np.asarray(m, float)))
+
+
 def test_value_bit_encoding_round_trip():
     width = np.pi / an.ORIENTATIONS
     centres = np.concatenate([[-12.0], (an.FLOW_EDGES_SIGNED[:-1] + an.FLOW_EDGES_SIGNED[1:]) / 2])
@@ -49,10 +54,10 @@ def test_value_bit_encoding_round_trip():
             assert an.decode_value(word, bit) == (o, k)
             seen.add((word, bit))
             theta = (o + 0.25) * width  # nearer the lower neighbour
-            words = an.value_words(np.array(centres[k]), np.array(theta))
+            words = words_of(centres[k], theta)
             assert words[word] >> np.uint64(bit) & np.uint64(1) == 1
             # the same measurement with the gradient reversed has the same value
-            same = an.value_words(np.array(-centres[k]), np.array(theta - np.pi))
+            same = words_of(-centres[k], theta - np.pi)
             np.testing.assert_array_equal(words, same)
             # and one more bit, for the nearer neighbouring orientation
             assert sum(bin(int(w)).count("1") for w in words) == 2
@@ -62,17 +67,17 @@ def test_value_bit_encoding_round_trip():
 def test_neighbouring_orientation_across_zero_flips_the_sign():
     # 1 degree and 179 degrees are 2 degrees apart; m = 3 along 1 degree is
     # m = -3 along 179 degrees.
-    words = an.value_words(np.array(3.0), np.array(np.deg2rad(1.0)))
+    words = words_of(3.0, np.deg2rad(1.0))
     word, bit = an.encode_value(an.ORIENTATIONS - 1, int(an.flow_bin(np.array(-3.0))))
     assert words[word] >> np.uint64(bit) & np.uint64(1) == 1
 
 
 def test_candidates_accept_smooth_change_and_reject_reversal():
     theta = np.array(0.3)
-    words = an.value_words(np.array(2.0), theta)[:, None, None]
+    words = words_of(2.0, theta)[:, None, None]
     tol = np.array(0.3)
     for m, expected in ((2.0, True), (2.6, True), (-2.0, False), (5.0, False)):
-        o, cand = an.candidate_slots(np.array(m), theta, tol, 0.5, 0.1)
+        o, cand = an.candidate_slots(*fold_direction(theta, np.array(m)), tol, 0.5, 0.1)
         allowed = an.map_slot(words, np.asarray(o)[None, None])[0, 0]
         assert bool(allowed & cand) == expected, m
 

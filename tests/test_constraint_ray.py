@@ -10,7 +10,7 @@ from motiondetect.constraint_ray import ConstraintRayConfig
 from motiondetect.egomotion import EgoMotion
 from motiondetect.hough import STILL, UNKNOWN, coarse_field
 from motiondetect.observer_motion import UNBOUNDED, canonical_library, classify
-from motiondetect.pipeline import GridGeometry, NormalFlowField
+from motiondetect.pipeline import GridGeometry, NormalFlowField, fold_direction
 
 from .scenes import class_accuracy, run_detector, scene
 
@@ -83,7 +83,7 @@ def test_bit_test_agrees_with_the_exact_interval():
     )
     tol = np.full((64, 64), 0.05, np.float32)
     flagged = cr.check_measurements(model, field, tol)
-    folded, mf = cr.fold_direction(theta, m)
+    folded, mf = fold_direction(theta, m)
     bins = cr.direction_bin(folded)
     allowed = np.take_along_axis(filt, bins[..., None], axis=2)[..., 0]
     from_image = field.valid & ((allowed & cr.encode_interval(mf - tol, mf + tol)) == 0)
