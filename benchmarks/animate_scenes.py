@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from motiondetect.animate import AnimateConfig  # noqa: E402
+from motiondetect.animate.normal_footprints import AnimateConfig  # noqa: E402
 from tests.scenes import (  # noqa: E402
     near_reversal,
     object_hits,

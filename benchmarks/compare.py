@@ -26,10 +26,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from motiondetect.detection import MotionDetector
-from motiondetect.egomotion import EgoMotion
-from motiondetect.evaluate import Counts, find_gt_folder, score_frame
-from motiondetect.video import open_source, read_mask
+from motiondetect.constraint_ray.egomotion import EgoMotion
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.video import open_source, read_mask
+from motiondetect.tools.evaluate import Counts, find_gt_folder, score_frame
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"

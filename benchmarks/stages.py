@@ -17,8 +17,8 @@ import cv2
 import numpy as np
 from common import decode_only, make_pan_clip, mog2_on, read_all, single_thread, timed
 
-from motiondetect import luts, stages
-from motiondetect.pipeline import NormalFlowPipeline, StageConfig, measure_level
+from motiondetect.measurement import luts, stages
+from motiondetect.measurement.normal_flow import NormalFlowPipeline, StageConfig, measure_level
 
 
 def per_stage(frames: list[np.ndarray], config: StageConfig) -> dict[str, float]:

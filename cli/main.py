@@ -17,7 +17,7 @@ from tqdm import tqdm
 from tqdm.contrib.logging import logging_redirect_tqdm
 
 from motiondetect import __version__
-from motiondetect.settings import DEFAULTS, SettingsError, load_config_file, make_settings
+from motiondetect.app.settings import DEFAULTS, SettingsError, load_config_file, make_settings
 
 log = logging.getLogger("motiondetect")
 
@@ -177,7 +177,7 @@ def _d(key: str) -> str:
 @click.option("-v", "--verbose", is_flag=True, help="Debug logging and tracebacks.")
 def detect(inputs, config_file, quiet, verbose, **options) -> None:
     """Detect independent motion in videos, frame folders or directories of videos."""
-    from motiondetect.runner import InputError, run
+    from motiondetect.app.runner import InputError, run
 
     _setup_logging(verbose, quiet)
     with _guard(verbose):
@@ -270,7 +270,7 @@ def _print_summary(result) -> None:
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per input.")
 def info(inputs, as_json) -> None:
     """Print what the tool sees in each input: frames, fps, size and codec."""
-    from motiondetect.video import VideoError, open_source
+    from motiondetect.io.video import VideoError, open_source
 
     failed = 0
     for path in inputs:
@@ -360,7 +360,7 @@ def synth(
     seed,
 ) -> None:
     """Render a rigid 3-D scene seen by a moving camera, with ground truth."""
-    from motiondetect.synth import SynthConfig, write_sequence
+    from motiondetect.tools.synth import SynthConfig, write_sequence
 
     with _guard(False):
         config = SynthConfig(
@@ -408,9 +408,9 @@ def synth(
 )
 def evaluate(pred, gt, warmup, output) -> None:
     """Score predicted masks (detect --masks) against ground-truth masks."""
-    from motiondetect.evaluate import EvaluateError, format_table, table_rows
-    from motiondetect.evaluate import evaluate as run_evaluate
-    from motiondetect.report import atomic_text
+    from motiondetect.io.report import atomic_text
+    from motiondetect.tools.evaluate import EvaluateError, format_table, table_rows
+    from motiondetect.tools.evaluate import evaluate as run_evaluate
 
     try:
         rows = table_rows(run_evaluate(pred, gt, warmup=warmup))

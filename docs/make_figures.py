@@ -18,13 +18,13 @@ import cv2
 import numpy as np
 from skimage import data
 
-from motiondetect.animate import footprint_cells
-from motiondetect.annotate import annotate, annotated_size
-from motiondetect.constraint_ray import allowed_interval
-from motiondetect.detection import MotionDetector
-from motiondetect.observer_motion import UNBOUNDED
-from motiondetect.pipeline import NormalFlowPipeline
-from motiondetect.video import open_source, to_display
+from motiondetect.animate.normal_footprints import footprint_cells
+from motiondetect.constraint_ray.normal_filter import allowed_interval
+from motiondetect.constraint_ray.observer_motion import UNBOUNDED
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.annotate import annotate, annotated_size
+from motiondetect.io.video import open_source, to_display
+from motiondetect.measurement.normal_flow import NormalFlowPipeline
 
 ROOT = Path(__file__).resolve().parents[1]
 FONT = cv2.FONT_HERSHEY_SIMPLEX

@@ -7,9 +7,9 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from motiondetect.detection import MotionDetector
-from motiondetect.evaluate import Counts, score_frame
-from motiondetect.synth import CAMERA_CLASS, SynthConfig, render_frames
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.tools.evaluate import Counts, score_frame
+from motiondetect.tools.synth import CAMERA_CLASS, SynthConfig, render_frames
 
 
 @lru_cache(maxsize=32)

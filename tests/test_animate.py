@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motiondetect import animate as an
-from motiondetect.animate import AnimateConfig
-from motiondetect.pipeline import GridGeometry, NormalFlowField, fold_direction
+from motiondetect.animate import normal_footprints as an
+from motiondetect.animate.normal_footprints import AnimateConfig
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField, fold_direction
 
 from .scenes import near_reversal, object_hits, run_detector, scene
 

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
-from motiondetect.video import open_source
+from motiondetect.io.video import open_source
 
 from .scenes import scene
 from .test_cli import check_outputs, write_video

@@ -16,7 +16,7 @@ import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
-from motiondetect.video import count_decodable_frames
+from motiondetect.io.video import count_decodable_frames
 
 from .scenes import scene
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motiondetect import constraint_ray as cr
-from motiondetect.constraint_ray import ConstraintRayConfig
-from motiondetect.egomotion import EgoMotion
-from motiondetect.hough import STILL, UNKNOWN, coarse_field
-from motiondetect.observer_motion import UNBOUNDED, canonical_library, classify
-from motiondetect.pipeline import GridGeometry, NormalFlowField, fold_direction
+from motiondetect.constraint_ray import normal_filter as cr
+from motiondetect.constraint_ray.egomotion import EgoMotion
+from motiondetect.constraint_ray.hough import STILL, UNKNOWN, coarse_field
+from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
+from motiondetect.constraint_ray.observer_motion import UNBOUNDED, canonical_library, classify
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField, fold_direction
 
 from .scenes import class_accuracy, run_detector, scene
 
@@ -66,7 +66,7 @@ def test_interval_bit_encoding_round_trip():
 def test_bit_test_agrees_with_the_exact_interval():
     vw = np.full((64, 64, 2), [0.5, 0.0], np.float32)
     vxy = np.full((64, 64, 2), [1.0, 0.2], np.float32)
-    from motiondetect.observer_motion import ObserverMotion
+    from motiondetect.constraint_ray.observer_motion import ObserverMotion
 
     model = ObserverMotion(1, {}, 1.0, vw, vxy, 3.0)
     filt = cr.filter_image(model)
@@ -148,7 +148,7 @@ def test_every_library_entry_classifies_as_itself(index):
     geometry = GridGeometry((512, 384), (512, 384))
     library = canonical_library(geometry)
     entry = library[index % len(library)]
-    from motiondetect.hough import CoarseField
+    from motiondetect.constraint_ray.hough import CoarseField
 
     units = entry.template
     if entry.axial:  # class 5: half the regions one way, half the other
@@ -235,7 +235,7 @@ def test_tracking_shot_needs_the_fitted_lower_bound():
 @pytest.mark.slow
 @pytest.mark.parametrize("camera", ["forward", "uniform"])
 def test_known_egomotion_detects_the_mover(tmp_path, camera):
-    from motiondetect.synth import SynthConfig, write_sequence
+    from motiondetect.tools.synth import SynthConfig, write_sequence
 
     config = SynthConfig(camera=camera, movers=("smooth",), frames=16, supersample=1)
     write_sequence(config, tmp_path)

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.evaluate import Counts, evaluate_sequence, score_frame
+from motiondetect.tools.evaluate import Counts, evaluate_sequence, score_frame
 
 
 def test_metrics_equal_hand_computed_numbers():

@@ -8,9 +8,9 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.detection import MotionDetector
-from motiondetect.events import EventRules, EventTimeline
-from motiondetect.synth import SynthConfig, render_frames
+from motiondetect.app.events import EventRules, EventTimeline
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.tools.synth import SynthConfig, render_frames
 
 pytestmark = pytest.mark.slow
 RULES = EventRules(min_frames=3, merge_gap=5, pad=0)

@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
-from motiondetect.evaluate import evaluate_sequence
+from motiondetect.tools.evaluate import evaluate_sequence
 
 from .conftest import shared_path
 from .test_cli import check_outputs

@@ -16,9 +16,9 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect import runner
-from motiondetect.runner import InputJob, process_input
-from motiondetect.settings import make_settings
+from motiondetect.app import runner
+from motiondetect.app.runner import InputJob, process_input
+from motiondetect.app.settings import make_settings
 
 from .scenes import scene
 from .test_cli import check_outputs, write_video

@@ -6,8 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect import stages
-from motiondetect.pipeline import NormalFlowPipeline, StageConfig
+from motiondetect.measurement import stages
+from motiondetect.measurement.normal_flow import NormalFlowPipeline, StageConfig
 
 from .conftest import as_uint8, fourier_shift
 
@@ -205,8 +205,8 @@ def test_working_size_keeps_aspect_and_minimum():
 
 
 def test_bin_table_equals_searchsorted():
-    from motiondetect.constraint_ray import MAGNITUDE_EDGES
-    from motiondetect.luts import BinTable
+    from motiondetect.constraint_ray.normal_filter import MAGNITUDE_EDGES
+    from motiondetect.measurement.luts import BinTable
 
     table = BinTable(MAGNITUDE_EDGES, step=0.125, limit=9.0)
     edges = MAGNITUDE_EDGES[1:-1]

@@ -5,8 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motiondetect import synth
-from motiondetect.synth import Quad, Renderer, SynthConfig
+from motiondetect.tools import synth
+from motiondetect.tools.synth import Quad, Renderer, SynthConfig
 
 
 def test_textured_plane_translation_matches_the_analytic_shift():
@@ -70,8 +70,8 @@ def test_mover_masks_match_the_rendered_pixels():
 
 
 def test_scene_file_is_valid_egomotion(tmp_path):
-    from motiondetect.egomotion import EgoMotion
-    from motiondetect.pipeline import GridGeometry
+    from motiondetect.constraint_ray.egomotion import EgoMotion
+    from motiondetect.measurement.normal_flow import GridGeometry
 
     config = SynthConfig(camera="uniform", movers=(), frames=3, width=96, height=72, supersample=1)
     info = synth.write_sequence(config, tmp_path)

@@ -42,11 +42,15 @@ from typing import Literal
 
 import numpy as np
 
-from .constraint_ray import DIRECTION_BINS, DetectorOutput, direction_bin
-from .hough import measurement_tolerance
-from .luts import BinTable
-from .pipeline import GridGeometry, NormalFlowField
-from .regions import drop_isolated, find_regions
+from motiondetect.constraint_ray.hough import measurement_tolerance
+from motiondetect.constraint_ray.normal_filter import (
+    DIRECTION_BINS,
+    DetectorOutput,
+    direction_bin,
+)
+from motiondetect.detection.regions import drop_isolated, find_regions
+from motiondetect.measurement.luts import BinTable
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField
 
 NAME = "animate"
 
@@ -181,7 +185,7 @@ def value_words(theta: np.ndarray, m: np.ndarray) -> np.ndarray:
     ----------
     theta, m : ndarray
         Folded measurements: orientation in [0, pi) and the normal flow
-        signed along it (:func:`motiondetect.pipeline.fold_direction`).
+        signed along it (:func:`motiondetect.measurement.normal_flow.fold_direction`).
 
     Returns
     -------

@@ -27,7 +27,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .video import read_mask
+from motiondetect.io.video import read_mask
 
 GT_FOLDERS = ("groundtruth", "Annotations", "truth", "masks")
 UNKNOWN_VALUES = (85, 170)

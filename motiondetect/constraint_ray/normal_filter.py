@@ -28,11 +28,19 @@ from typing import Literal
 
 import numpy as np
 
-from .hough import CoarseField, coarse_field, measurement_tolerance
-from .luts import BinTable
-from .observer_motion import ObserverMotion, classify, constraint_model
-from .pipeline import NormalFlowField
-from .regions import Region, drop_isolated, find_regions
+from motiondetect.constraint_ray.hough import (
+    CoarseField,
+    coarse_field,
+    measurement_tolerance,
+)
+from motiondetect.constraint_ray.observer_motion import (
+    ObserverMotion,
+    classify,
+    constraint_model,
+)
+from motiondetect.detection.regions import Region, drop_isolated, find_regions
+from motiondetect.measurement.luts import BinTable
+from motiondetect.measurement.normal_flow import NormalFlowField
 
 NAME = "constraint-ray"
 

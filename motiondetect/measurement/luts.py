@@ -13,7 +13,7 @@ Codes (all 8-bit):
 * gradient magnitude: ``uint8``, log-companded the same way;
 * gradient direction: ``uint8``, 256 steps around the circle.
 
-The float twins live in :mod:`motiondetect.stages`; ``docs/stages.md`` gives
+The float twins live in :mod:`motiondetect.measurement.stages`; ``docs/stages.md`` gives
 the measured cost of the quantisation.
 """
 

@@ -1,7 +1,7 @@
 """Annotated frames: boxes, flagged cells, observer class and the coarse field.
 
 Kept apart from detection (DVR-Scan's overlays): one ``annotate`` call per
-frame draws a :class:`~motiondetect.detection.FrameResult` onto an image.
+frame draws a :class:`~motiondetect.detection.detector.FrameResult` onto an image.
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .detection import FrameResult
-from .hough import REGIONS, STILL, UNKNOWN
-from .timeline import CLASS_COLOURS
+from motiondetect.constraint_ray.hough import REGIONS, STILL, UNKNOWN
+from motiondetect.detection.detector import FrameResult
+from motiondetect.io.timeline import CLASS_COLOURS
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 _DETECTOR_COLOURS = {  # BGR

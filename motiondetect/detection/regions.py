@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .pipeline import GridGeometry
+from motiondetect.measurement.normal_flow import GridGeometry
 
 _EIGHT = np.ones((3, 3), np.float32)
 

@@ -13,12 +13,21 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .animate import AnimateConfig, AnimateDetector
-from .constraint_ray import ConstraintRayConfig, ConstraintRayDetector, DetectorOutput
-from .hough import CoarseField
-from .observer_motion import ObserverMotion
-from .pipeline import GridGeometry, NormalFlowField, NormalFlowPipeline, StageConfig
-from .regions import Region, find_regions, regions_mask
+from motiondetect.animate.normal_footprints import AnimateConfig, AnimateDetector
+from motiondetect.constraint_ray.hough import CoarseField
+from motiondetect.constraint_ray.normal_filter import (
+    ConstraintRayConfig,
+    ConstraintRayDetector,
+    DetectorOutput,
+)
+from motiondetect.constraint_ray.observer_motion import ObserverMotion
+from motiondetect.detection.regions import Region, find_regions, regions_mask
+from motiondetect.measurement.normal_flow import (
+    GridGeometry,
+    NormalFlowField,
+    NormalFlowPipeline,
+    StageConfig,
+)
 
 _GROW = np.ones((3, 3), np.uint8)
 

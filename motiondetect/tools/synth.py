@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 from skimage import data as skdata
 
-from .egomotion import Intrinsics
+from motiondetect.constraint_ray.egomotion import Intrinsics
 
 CAMERAS = (
     "static",
@@ -436,9 +436,9 @@ def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4
     """
     from pathlib import Path
 
-    from .egomotion import write_egomotion
-    from .report import atomic_text
-    from .video import VideoSink, write_png
+    from motiondetect.constraint_ray.egomotion import write_egomotion
+    from motiondetect.io.report import atomic_text
+    from motiondetect.io.video import VideoSink, write_png
 
     out = Path(out_dir)
     gt_dir = out / "truth"

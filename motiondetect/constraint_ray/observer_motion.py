@@ -1,6 +1,6 @@
 """Which motion is the observer making? Section 3.2's canonical classes.
 
-A coarse 4x4 field (:mod:`motiondetect.hough`) is normalised into a feature
+A coarse 4x4 field (:mod:`motiondetect.constraint_ray.hough`) is normalised into a feature
 vector and matched by nearest neighbour against a library of canonical
 motion fields:
 
@@ -30,8 +30,8 @@ from typing import Literal
 
 import numpy as np
 
-from .hough import DIRECTIONS, REGIONS, STILL, CoarseField
-from .pipeline import GridGeometry, NormalFlowField
+from motiondetect.constraint_ray.hough import DIRECTIONS, REGIONS, STILL, CoarseField
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField
 
 UNBOUNDED = 1.0e4  # inverse-depth bound standing in for "a -> infinity"
 

@@ -11,9 +11,9 @@ try:
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from .animate import AnimateConfig
-from .constraint_ray import ConstraintRayConfig
-from .pipeline import StageConfig
+from motiondetect.animate.normal_footprints import AnimateConfig
+from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
+from motiondetect.measurement.normal_flow import StageConfig
 
 #: The defaults, one place. Keys are the long option names with "_" for "-".
 DEFAULTS: dict[str, object] = {

@@ -26,13 +26,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from . import __version__
-from .annotate import annotate, annotated_size
-from .detection import FrameResult, MotionDetector
-from .egomotion import EgoMotion, EgoMotionError
-from .events import EventRules, EventTimeline
-from .regions import Region, regions_mask
-from .report import (
+from motiondetect import __version__
+from motiondetect.app.events import EventRules, EventTimeline
+from motiondetect.app.settings import Settings
+from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
+from motiondetect.detection.detector import FrameResult, MotionDetector
+from motiondetect.detection.regions import Region, regions_mask
+from motiondetect.io.annotate import annotate, annotated_size
+from motiondetect.io.report import (
     SCHEMA_VERSION,
     DetectionsCsvWriter,
     FramesJsonlWriter,
@@ -40,9 +41,8 @@ from .report import (
     write_events_csv,
     write_json,
 )
-from .settings import Settings
-from .timeline import draw_timeline
-from .video import (
+from motiondetect.io.timeline import draw_timeline
+from motiondetect.io.video import (
     IMAGE_EXTENSIONS,
     FrameSource,
     VideoError,

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .pipeline import NormalFlowField
-from .stages import GRID
+from motiondetect.measurement.normal_flow import NormalFlowField
+from motiondetect.measurement.stages import GRID
 
 REGIONS = 4
 DIRECTIONS = 8

@@ -29,8 +29,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .observer_motion import UNBOUNDED, ObserverMotion
-from .pipeline import GridGeometry
+from motiondetect.constraint_ray.observer_motion import UNBOUNDED, ObserverMotion
+from motiondetect.measurement.normal_flow import GridGeometry
 
 FORMAT = "motiondetect-egomotion"
 _GL_TO_CV = np.diag([1.0, -1.0, -1.0])

@@ -18,8 +18,8 @@ from typing import Literal
 
 import numpy as np
 
-from . import luts, stages
-from .stages import GRID
+from motiondetect.measurement import luts, stages
+from motiondetect.measurement.stages import GRID
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ Dataflow, one function per box of Figure 10::
     ROISTORE  -> subsample                 (to 64x64)
 
 Every MAX-MUX stage has a float reference here and a lookup-table twin in
-:mod:`motiondetect.luts`; tests compare the two.
+:mod:`motiondetect.measurement.luts`; tests compare the two.
 
 Units: grey levels are 0..255 (16-bit input is scaled by 1/257); distances are
 *working-resolution pixels* ("work px"); flow is work px per frame; angles are

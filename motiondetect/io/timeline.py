@@ -9,8 +9,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .events import EventTimeline
-from .observer_motion import CLASS_NAMES
+from motiondetect.app.events import EventTimeline
+from motiondetect.constraint_ray.observer_motion import CLASS_NAMES
 
 CLASS_COLOURS = {  # BGR
     -1: (160, 160, 160),
