@@ -85,6 +85,12 @@ def _d(key: str) -> str:
     help=f"Which detector {_d('detector')}.",
 )
 @click.option(
+    "--measure",
+    type=click.Choice(["velocity", "normal"]),
+    help="Motion measurement: the dense 2-D velocity, or the paper's 64x64 normal flow "
+    f"{_d('measure')}.",
+)
+@click.option(
     "--persistence",
     type=click.IntRange(1, 30),
     help="Report a region only if it overlaps flagged cells in each of the previous "

@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 from skimage import data
 
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+#: The real clips: $MOTIONDETECT_DATA, else ../shared/data beside the checkout.
+SHARED_DATA = Path(
+    os.environ.get("MOTIONDETECT_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data"
+)
 
 
 def fourier_shift(image: np.ndarray, dx: float, dy: float) -> np.ndarray:

@@ -36,7 +36,9 @@ def run_detector(
 
     ``persistence=1`` measures the detector itself, without the temporal filter.
     """
-    md = MotionDetector(detector, persistence=persistence, **kw)
+    configs = [kw.pop(k) for k in ("stages", "constraint_ray", "animate") if k in kw]
+    kw.setdefault("measure", "normal")
+    md = MotionDetector(detector, *configs, persistence=persistence, **kw)
     counts, classes, results = Counts(), [], []
     for fr in frames:
         res = md.process(fr.image, fr.index, fr.index / 30.0)

@@ -43,11 +43,8 @@ from typing import Literal
 import numpy as np
 
 from motiondetect.constraint_ray.hough import measurement_tolerance
-from motiondetect.constraint_ray.normal_filter import (
-    DIRECTION_BINS,
-    DetectorOutput,
-    direction_bin,
-)
+from motiondetect.constraint_ray.normal_filter import DIRECTION_BINS, direction_bin
+from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import drop_isolated, find_regions
 from motiondetect.measurement.luts import BinTable
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField
@@ -453,8 +450,10 @@ class AnimateDetector:
     """
 
     name = NAME
+    measurement = "normal"
+    config_type = AnimateConfig
 
-    def __init__(self, config: AnimateConfig | None = None) -> None:
+    def __init__(self, config: AnimateConfig | None = None, egomotion=None) -> None:
         self.config = config or AnimateConfig()
         self._map: np.ndarray | None = None
         self._blocks: np.ndarray | None = None

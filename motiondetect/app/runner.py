@@ -12,6 +12,7 @@ One failing input never stops the others.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import multiprocessing
@@ -200,39 +201,38 @@ def _filter(result: FrameResult, roi: np.ndarray | None, min_area: int) -> Frame
         return result
     kept = [r for r in result.regions if _keep(r, roi, min_area)]
     flagged = regions_mask(kept) if kept else np.zeros_like(result.flagged)
-    return FrameResult(
-        result.index,
-        result.time_s,
-        kept,
-        flagged,
-        result.observer,
-        result.coarse,
-        result.field,
-        result.outputs,
-    )
+    mask = result.mask
+    if mask is not None:
+        h, w = mask.shape
+        mask = mask & (
+            cv2.resize(flagged.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST) > 0
+        )
+    return dataclasses.replace(result, regions=kept, flagged=flagged, mask=mask)
+
+
+def _observer_record(result: FrameResult) -> dict:
+    if result.observer is not None:
+        return result.observer.to_json()
+    if result.camera is not None:
+        return {"class": result.camera.class_id, **result.camera.to_json(), "params": {}}
+    name = "warm-up" if result.warm_up else "none"
+    return {"class": -1, "name": name, "confidence": 0.0, "params": {}}
 
 
 def _frame_record(result: FrameResult) -> dict:
-    obs = result.observer
-    observer = (
-        obs.to_json()
-        if obs is not None
-        else {
-            "class": -1,
-            "name": "warm-up" if result.warm_up else "none",
-            "confidence": 0.0,
-            "params": {},
-        }
-    )
-    return {
+    record = {
         "frame": result.index,
         "time_s": round(result.time_s, 4),
         "warm_up": result.warm_up,
-        "observer_motion": observer,
+        "reliable": result.reliable,
+        "observer_motion": _observer_record(result),
         "moving_fraction": round(result.moving_fraction, 5),
         "score": round(result.score, 4),
         "detections": [r.to_json() for r in result.regions],
     }
+    if result.reason:
+        record["reason"] = result.reason
+    return record
 
 
 def _make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
@@ -245,9 +245,8 @@ def _make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
             raise InputError(str(exc)) from exc
     return MotionDetector(
         settings.detector,
-        stages=settings.stage_config(),
-        constraint_ray=settings.constraint_ray_config(),
-        animate=settings.animate_config(),
+        *settings.detector_configs(),
+        measure=settings.measure,
         egomotion=ego,
         persistence=settings.persistence,
     )
@@ -330,11 +329,7 @@ def _process(
                     record["detections"],
                 )
                 if settings.masks:
-                    mask = cv2.resize(
-                        result.flagged.astype(np.uint8) * 255,
-                        (info.width, info.height),
-                        interpolation=cv2.INTER_NEAREST,
-                    )
+                    mask = result.input_mask(info.width, info.height)
                     write_png(masks_dir / f"{result.index:06d}.png", mask)
                 if sink is not None:
                     sink.write(annotate(to_display(frame.image), result, size))

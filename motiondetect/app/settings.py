@@ -19,6 +19,7 @@ from motiondetect.measurement.normal_flow import StageConfig
 DEFAULTS: dict[str, object] = {
     "output": "motiondetect-out",
     "detector": "both",
+    "measure": "velocity",
     "persistence": 2,
     "masks": False,
     "video": True,
@@ -57,6 +58,7 @@ class Settings:
 
     output: Path
     detector: str
+    measure: str
     persistence: int
     masks: bool
     video: bool
@@ -95,6 +97,10 @@ class Settings:
         return AnimateConfig(
             first_appearance=self.first_appearance, jitter_compensation=self.jitter_compensation
         )
+
+    def detector_configs(self) -> tuple:
+        """Every config the detector takes, built from these settings."""
+        return (self.stage_config(), self.constraint_ray_config(), self.animate_config())
 
     def to_json(self) -> dict:
         out = {}
@@ -146,6 +152,8 @@ def make_settings(values: dict) -> Settings:
             merged[key] = Path(merged[key])
     rois = merged["roi"]
     merged["roi"] = tuple(parse_roi(r) if isinstance(r, str) else tuple(r) for r in rois)
+    if merged["measure"] not in ("velocity", "normal"):
+        raise SettingsError(f"--measure must be velocity or normal, but got {merged['measure']!r}")
     if merged["video_format"] not in ("webm", "mp4"):
         raise SettingsError(
             f"--video-format must be webm or mp4, but got {merged['video_format']!r}"

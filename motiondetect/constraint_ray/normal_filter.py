@@ -23,7 +23,7 @@ Per frame:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -38,7 +38,8 @@ from motiondetect.constraint_ray.observer_motion import (
     classify,
     constraint_model,
 )
-from motiondetect.detection.regions import Region, drop_isolated, find_regions
+from motiondetect.detection.base import DetectorOutput
+from motiondetect.detection.regions import drop_isolated, find_regions
 from motiondetect.measurement.luts import BinTable
 from motiondetect.measurement.normal_flow import NormalFlowField
 
@@ -238,18 +239,6 @@ class ConstraintRayConfig:
                 raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
 
 
-@dataclass(frozen=True)
-class DetectorOutput:
-    """What a detector reports for one frame."""
-
-    flagged: np.ndarray  # (64, 64) bool, after noise removal
-    strength: np.ndarray  # (64, 64) float32 in [0, 1]
-    regions: list[Region]
-    observer: ObserverMotion | None = None
-    coarse: CoarseField | None = None
-    extra: dict = field(default_factory=dict)
-
-
 class ConstraintRayDetector:
     """Flags motion no rigid world seen by the current observer motion could make.
 
@@ -262,10 +251,15 @@ class ConstraintRayDetector:
     """
 
     name = NAME
+    measurement = "normal"
+    config_type = ConstraintRayConfig
 
     def __init__(self, config: ConstraintRayConfig | None = None, egomotion=None) -> None:
         self.config = config or ConstraintRayConfig()
         self.egomotion = egomotion
+
+    def reset(self) -> None:
+        """Nothing carries over between frames."""
 
     def _observer(self, field: NormalFlowField, coarse: CoarseField, frame_index: int):
         cfg = self.config
@@ -285,7 +279,9 @@ class ConstraintRayDetector:
         observer = self._observer(field, coarse, frame_index)
         empty = np.zeros(field.flow_px.shape, bool)
         if not observer.constrains or observer.confidence < cfg.min_confidence:
-            return DetectorOutput(empty, empty.astype(np.float32), [], observer, coarse)
+            return DetectorOutput(
+                empty, empty.astype(np.float32), [], observer=observer, coarse=coarse
+            )
         tol = cfg.noise_sigmas * measurement_tolerance(
             field, cfg.noise_grey, cfg.tolerance_floor_px / cfg.noise_sigmas
         ) + cfg.tolerance_relative * np.abs(field.flow_px)
@@ -300,4 +296,4 @@ class ConstraintRayDetector:
         regions = find_regions(
             flagged, strength, field.geometry, min_cells=cfg.min_cells, detector=NAME
         )
-        return DetectorOutput(flagged, strength, regions, observer, coarse)
+        return DetectorOutput(flagged, strength, regions, observer=observer, coarse=coarse)

@@ -1,46 +1,45 @@
-"""Detectors chosen by name, and their fusion (the paper's "best of both worlds").
+"""One input's detection, frame by frame: measurement, detectors, fusion, objects.
 
-:class:`MotionDetector` drives the stage pipeline and the chosen detectors
-for one input, frame by frame. With ``both``, the flagged cells of the two
-detectors are united and regrouped into regions; each region records which
-detector (or both) flagged its cells.
+:class:`MotionDetector` runs the measurement its detectors consume (the
+normal-flow stages of Appendix A, or the dense 2-D velocity), the
+detectors chosen by name from the registry, and then:
+
+* **velocity path** (default): the observer motion is fitted once per
+  frame and shared; the detectors' pixel masks are united, grouped into
+  objects and tracked (:mod:`.objects`); a frame whose fit cannot be
+  trusted is reported as unreliable and flags nothing;
+* **normal path** (the paper's): the detectors' 64x64 cells are united and
+  regrouped into regions, kept when they persist in place.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
-from motiondetect.animate.normal_footprints import AnimateConfig, AnimateDetector
+from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
 from motiondetect.constraint_ray.hough import CoarseField
-from motiondetect.constraint_ray.normal_filter import (
-    ConstraintRayConfig,
-    ConstraintRayDetector,
-    DetectorOutput,
-)
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
+from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
+from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
-from motiondetect.measurement.normal_flow import (
-    GridGeometry,
-    NormalFlowField,
-    NormalFlowPipeline,
-    StageConfig,
-)
+from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline
+from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
-
-DETECTORS = {
-    "constraint-ray": ("constraint-ray",),
-    "animate": ("animate",),
-    "both": ("constraint-ray", "animate"),
-}
 
 
 @dataclass(frozen=True)
 class FrameResult:
-    """Everything reported for one frame."""
+    """Everything reported for one frame.
+
+    ``mask`` (work pixels) is set on the velocity path; ``reason`` says why
+    a frame could not be judged (then nothing is flagged on it).
+    """
 
     index: int
     time_s: float
@@ -48,11 +47,16 @@ class FrameResult:
     flagged: np.ndarray  # (64, 64) bool, union of the detectors
     observer: ObserverMotion | None
     coarse: CoarseField | None
-    field: NormalFlowField | None
+    field: object | None
     outputs: dict[str, DetectorOutput] = field(default_factory=dict)
+    mask: np.ndarray | None = None
+    camera: CameraFit | None = None
+    reason: str = ""
 
     @property
     def moving_fraction(self) -> float:
+        if self.mask is not None:
+            return float(self.mask.mean())
         return float(self.flagged.mean())
 
     @property
@@ -62,6 +66,17 @@ class FrameResult:
     @property
     def warm_up(self) -> bool:
         return self.field is None
+
+    @property
+    def reliable(self) -> bool:
+        return not self.reason
+
+    def input_mask(self, width: int, height: int) -> np.ndarray:
+        """Flagged pixels at input size, (height, width) uint8 0/255."""
+        source = self.mask if self.mask is not None else self.flagged
+        return cv2.resize(
+            source.astype(np.uint8) * 255, (width, height), interpolation=cv2.INTER_NEAREST
+        )
 
 
 def fuse(
@@ -86,51 +101,131 @@ def fuse(
     return flagged, fused
 
 
+def object_region(
+    obj: MovingObject, outputs: dict[str, DetectorOutput], geometry: GridGeometry
+) -> Region:
+    """A tracked object as a reported region, in input pixels."""
+    sx = geometry.input_size[0] / geometry.work_size[0]
+    sy = geometry.input_size[1] / geometry.work_size[1]
+    x0, y0, x1, y1 = obj.box
+    bbox = [round(x0 * sx), round(y0 * sy), round((x1 - x0) * sx), round((y1 - y0) * sy)]
+    cells = np.argwhere(cells_from_mask(obj.mask, share=1e-6))
+    found = tuple(n for n, out in outputs.items() if (out.mask & obj.mask).any())
+    strength = max(float(out.pixel_strength[obj.mask].mean()) for out in outputs.values())
+    area = round(float(obj.mask.sum()) * sx * sy)
+    return Region(bbox, cells, area, strength, found, obj.track)
+
+
 class MotionDetector:
-    """Stage pipeline + detectors for one input.
+    """Measurement + detectors for one input.
 
     Parameters
     ----------
     detector : {"constraint-ray", "animate", "both"}
-    stages, constraint_ray, animate : configs
+    measure : {"velocity", "normal"}
+        The 2-D velocity (default) or the paper's normal flow.
+    configs : config dataclasses, optional
+        Any of the detectors', the stages' (``StageConfig``), the dense
+        flow's, the fit's and the tracker's; each replaces its defaults.
     egomotion : callable, optional
-        Known camera motion for the constraint ray filter.
+        Known camera motion, ``egomotion(frame_index, geometry)``.
+    persistence : int
+        Frames an object (or, on the normal path, a region) must persist.
     """
 
     def __init__(
         self,
         detector: str = "both",
-        *,
-        stages: StageConfig | None = None,
-        constraint_ray: ConstraintRayConfig | None = None,
-        animate: AnimateConfig | None = None,
+        *configs,
+        measure: str = "velocity",
         egomotion=None,
-        persistence: int = 2,
+        persistence: int = TrackConfig.persistence,
     ) -> None:
+        if measure not in DETECTOR_SETS:
+            raise ValueError(f"measure must be one of {sorted(DETECTOR_SETS)}, got {measure!r}")
+        if detector not in DETECTOR_SETS[measure]:
+            raise ValueError(
+                f"detector must be one of {sorted(DETECTOR_SETS[measure])}, but got {detector!r}"
+            )
         if persistence < 1:
             raise ValueError(f"persistence must be at least 1, but got {persistence}")
+        by_type = {type(c): c for c in configs if c is not None}
+        classes = registry()
+        self.measure = measure
         self.persistence = persistence
+        self.detectors = {
+            name: classes[name](by_type.get(classes[name].config_type), egomotion)
+            for name in DETECTOR_SETS[measure][detector]
+        }
+        self.min_cells = min(getattr(d.config, "min_cells", 3) for d in self.detectors.values())
+        self.fit_config = by_type.get(FitConfig, FitConfig())
+        track = by_type.get(TrackConfig, TrackConfig())
+        self.tracker = Tracker(dataclasses.replace(track, persistence=persistence))
+        if measure == "velocity":
+            self.pipeline = DenseFlow(by_type.get(DenseFlowConfig))
+        else:
+            from motiondetect.measurement.normal_flow import StageConfig
+
+            self.pipeline = NormalFlowPipeline(by_type.get(StageConfig))
+        self._epipole: np.ndarray | None = None
         self._recent: list[np.ndarray] = []
-        if detector not in DETECTORS:
-            raise ValueError(f"detector must be one of {sorted(DETECTORS)}, but got {detector!r}")
-        self.pipeline = NormalFlowPipeline(stages)
-        self.detectors = {}
-        for name in DETECTORS[detector]:
-            if name == "constraint-ray":
-                self.detectors[name] = ConstraintRayDetector(constraint_ray, egomotion)
-            else:
-                self.detectors[name] = AnimateDetector(animate)
-        self.min_cells = min(
-            (constraint_ray or ConstraintRayConfig()).min_cells,
-            (animate or AnimateConfig()).min_cells,
+
+    def reset(self) -> None:
+        """Start afresh (a new input, or after a gap in the frames)."""
+        self.pipeline.reset()
+        self.tracker.reset()
+        for det in self.detectors.values():
+            det.reset()
+        self._epipole, self._recent = None, []
+
+    def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
+        """Run one frame through the measurement and the detectors."""
+        flow = self.pipeline.process(frame)
+        if flow is None:
+            empty = np.zeros((GRID, GRID), bool)
+            return FrameResult(index, time_s, [], empty, None, None, None)
+        if self.measure == "velocity":
+            return self._velocity_frame(flow, index, time_s)
+        outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
+        flagged, regions = fuse(outputs, flow.geometry, self.min_cells)
+        flagged, regions = self._persistent(flagged, regions)
+        ray = outputs.get("constraint-ray")
+        observer = ray.observer if ray else None
+        coarse = ray.coarse if ray else None
+        return FrameResult(index, time_s, regions, flagged, observer, coarse, flow, outputs)
+
+    def _velocity_frame(self, flow: VelocityField, index: int, time_s: float) -> FrameResult:
+        fit = fit_camera(flow, self.fit_config, self._epipole)
+        self._epipole = fit.epipole
+        flow = dataclasses.replace(flow, camera=fit)
+        outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
+        judged = [out.camera for out in outputs.values() if out.camera is not None]
+        camera = judged[0] if judged else fit
+        empty = np.zeros((GRID, GRID), bool)
+        if not camera.reliable:
+            self.tracker.coast()
+            return FrameResult(
+                index, time_s, [], empty, None, None, flow, outputs, camera=camera,
+                reason=camera.reason,
+            )  # fmt: skip
+        union = np.zeros(flow.shape, bool)
+        for out in outputs.values():
+            union |= out.mask
+        confirmed = self.tracker.update(group_objects(union, flow.velocity_px, self.tracker.config))
+        regions = [object_region(obj, outputs, flow.geometry) for obj in confirmed]
+        mask = np.zeros(flow.shape, bool)
+        for obj in confirmed:
+            mask |= obj.mask
+        flagged = regions_mask(regions) if regions else empty
+        return FrameResult(
+            index, time_s, regions, flagged, None, None, flow, outputs, mask=mask, camera=camera
         )
 
     def _persistent(
         self, flagged: np.ndarray, regions: list[Region]
     ) -> tuple[np.ndarray, list[Region]]:
-        """Keep regions whose cells (grown by one) touched flagged cells in each
-        of the previous ``persistence - 1`` frames: independent movers persist
-        in place, most noise does not."""
+        """Normal path: keep regions whose cells (grown by one) touched flagged
+        cells in each of the previous ``persistence - 1`` frames."""
         recent, self._recent = self._recent, [*self._recent, flagged][-(self.persistence - 1) :]
         if self.persistence <= 1:
             return flagged, regions
@@ -139,17 +234,3 @@ class MotionDetector:
         grown = [cv2.dilate(r.astype(np.uint8), _GROW) > 0 for r in recent]
         kept = [r for r in regions if all(g[r.cells[:, 0], r.cells[:, 1]].any() for g in grown)]
         return (regions_mask(kept) if kept else np.zeros_like(flagged)), kept
-
-    def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
-        """Run one frame through the stages and the detectors."""
-        flow = self.pipeline.process(frame)
-        if flow is None:
-            empty = np.zeros((64, 64), bool)
-            return FrameResult(index, time_s, [], empty, None, None, None)
-        outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
-        flagged, regions = fuse(outputs, flow.geometry, self.min_cells)
-        flagged, regions = self._persistent(flagged, regions)
-        ray = outputs.get("constraint-ray")
-        observer = ray.observer if ray else None
-        coarse = ray.coarse if ray else None
-        return FrameResult(index, time_s, regions, flagged, observer, coarse, flow, outputs)

@@ -28,6 +28,8 @@ class Region:
         Mean violation strength of its cells, in [0, 1].
     detectors : tuple of str
         Which detectors found it.
+    track : int or None
+        Stable id of the object across frames (velocity path).
     """
 
     bbox: list[int]
@@ -35,14 +37,18 @@ class Region:
     area_px: int
     score: float
     detectors: tuple[str, ...] = field(default_factory=tuple)
+    track: int | None = None
 
     def to_json(self) -> dict:
-        return {
+        out = {
             "bbox": [int(v) for v in self.bbox],
             "area_px": int(self.area_px),
             "score": round(float(self.score), 4),
             "detectors": list(self.detectors),
         }
+        if self.track is not None:
+            out["track"] = int(self.track)
+        return out
 
 
 def drop_isolated(flagged: np.ndarray, min_neighbours: int) -> np.ndarray:

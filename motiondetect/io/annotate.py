@@ -18,7 +18,11 @@ _DETECTOR_COLOURS = {  # BGR
     ("constraint-ray",): (0, 140, 255),
     ("animate",): (255, 80, 200),
     ("constraint-ray", "animate"): (0, 0, 255),
+    ("velocity-ray",): (0, 140, 255),
+    ("velocity-animate",): (255, 80, 200),
+    ("velocity-ray", "velocity-animate"): (0, 0, 255),
 }
+_LEGEND = (("ray", (0, 140, 255)), ("animate", (255, 80, 200)), ("both", (0, 0, 255)))
 
 
 def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
@@ -33,8 +37,9 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         cv2.resize(image, size, interpolation=cv2.INTER_AREA) if (w0, h0) != size else image.copy()
     )
     sx, sy = size[0] / w0, size[1] / h0
-    if result.flagged.any():
-        overlay = cv2.resize(result.flagged.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST)
+    source = result.mask if result.mask is not None else result.flagged
+    if source.any():
+        overlay = cv2.resize(source.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST)
         tint = out.copy()
         tint[overlay > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
@@ -44,10 +49,33 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         p0 = (int(x * sx), int(y * sy))
         p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
         cv2.rectangle(out, p0, p1, colour, 2)
-        cv2.putText(out, f"{region.score:.2f}", (p0[0] + 2, p0[1] + 12), _FONT, 0.4, colour, 1)
+        label = f"#{region.track} " if region.track is not None else ""
+        _text(out, f"{label}{region.score:.2f}", (p0[0] + 2, p0[1] + 14), colour)
     _draw_coarse(out, result)
+    if not result.reliable:
+        cv2.rectangle(out, (0, 0), (out.shape[1] - 1, out.shape[0] - 1), (0, 200, 255), 4)
     _draw_label(out, result)
+    _draw_legend(out)
     return out
+
+
+def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
+    """Readable at any size: outlined, scaled to the frame (320 px wide and up)."""
+    scale = max(0.4, out.shape[1] / 800)
+    thick = max(1, round(scale * 1.5))
+    cv2.putText(out, text, origin, _FONT, scale, (0, 0, 0), thick + 2, cv2.LINE_AA)
+    cv2.putText(out, text, origin, _FONT, scale, colour, thick, cv2.LINE_AA)
+
+
+def _draw_legend(out: np.ndarray) -> None:
+    """Box colours by detector, bottom left."""
+    scale = max(0.4, out.shape[1] / 800)
+    step = int(18 * scale / 0.4 * 0.6) + 6
+    y = out.shape[0] - 6
+    for name, colour in reversed(_LEGEND):
+        cv2.rectangle(out, (6, y - step + 8), (16, y - 2), colour, -1)
+        _text(out, name, (20, y), colour)
+        y -= step
 
 
 def _draw_coarse(out: np.ndarray, result: FrameResult) -> None:
@@ -73,12 +101,22 @@ def _draw_coarse(out: np.ndarray, result: FrameResult) -> None:
             cv2.arrowedLine(out, centre, tip, (255, 255, 255), 1, cv2.LINE_AA, tipLength=0.3)
 
 
+def _observer_label(result: FrameResult) -> tuple[str, int]:
+    if result.observer is not None:
+        obs = result.observer
+        return f"{obs.name} {obs.confidence:.2f}", obs.class_id
+    if result.camera is not None:
+        cam = result.camera
+        if not result.reliable:
+            return f"UNRELIABLE: {result.reason}", -1
+        return f"{cam.label} {cam.inlier_share:.2f}", cam.class_id
+    return ("warm-up" if result.warm_up else "-"), -1
+
+
 def _draw_label(out: np.ndarray, result: FrameResult) -> None:
-    obs = result.observer
-    name = obs.name if obs is not None else ("warm-up" if result.warm_up else "-")
-    conf = f" {obs.confidence:.2f}" if obs is not None else ""
-    text = f"#{result.index} {result.time_s:7.2f}s  {name}{conf}"
-    colour = CLASS_COLOURS.get(obs.class_id if obs else -1, (255, 255, 255))
-    cv2.rectangle(out, (0, 0), (min(out.shape[1], 8 + 8 * len(text)), 18), (0, 0, 0), -1)
+    name, class_id = _observer_label(result)
+    text = f"#{result.index} {result.time_s:.2f}s {name}"
+    colour = CLASS_COLOURS.get(class_id, (255, 255, 255))
     cv2.circle(out, (out.shape[1] - 10, 10), 6, colour, -1)
-    cv2.putText(out, text, (4, 13), _FONT, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+    white = (255, 255, 255) if result.reliable else (0, 200, 255)
+    _text(out, text, (4, 16), white)

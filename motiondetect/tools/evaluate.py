@@ -49,6 +49,9 @@ class Counts:
     objects_hit: int = 0
     false_alarm_regions: int = 0
     frames: int = 0
+    cell_tp: int = 0
+    cell_fp: int = 0
+    cell_fn: int = 0
 
     def add(self, other: Counts) -> None:
         for name in self.__dataclass_fields__:
@@ -76,6 +79,7 @@ class Counts:
             "f_measure": f,
             "object_recall": ratio(self.objects_hit, self.objects),
             "false_alarm_regions_per_frame": ratio(self.false_alarm_regions, self.frames),
+            "cell_f1": ratio(2 * self.cell_tp, 2 * self.cell_tp + self.cell_fp + self.cell_fn),
             "frames": self.frames,
         }
 
@@ -111,6 +115,33 @@ def _temporal_roi(gt_folder: Path) -> tuple[int, int] | None:
     return None
 
 
+#: Cell-level scoring: cells of CELL_PX x CELL_PX input pixels.
+CELL_PX = 10
+CELL_POSITIVE = 0.3  # a cell is a mover when at least this share of it is mover
+CELL_NEGATIVE = 0.05  # ... background when at most this share is mover or unknown
+CELL_FLAGGED = 0.3  # ... flagged when at least this share of it is flagged
+
+
+def _cell_shares(mask: np.ndarray) -> np.ndarray:
+    h, w = mask.shape
+    rows, cols = h // CELL_PX, w // CELL_PX
+    cropped = mask[: rows * CELL_PX, : cols * CELL_PX].astype(np.float32)
+    return cropped.reshape(rows, CELL_PX, cols, CELL_PX).mean(axis=(1, 3))
+
+
+def cell_counts(flagged: np.ndarray, positive: np.ndarray, mover_or_unknown: np.ndarray):
+    """Cell-level (tp, fp, fn) over 10x10-pixel cells.
+
+    A cell is positive when >= 30 % of its pixels are mover, negative when
+    <= 5 % are mover or unknown, and unscored in between; it is flagged when
+    >= 30 % of its pixels are flagged.
+    """
+    pos = _cell_shares(positive) >= CELL_POSITIVE
+    neg = _cell_shares(mover_or_unknown) <= CELL_NEGATIVE
+    hit = _cell_shares(flagged) >= CELL_FLAGGED
+    return int((pos & hit).sum()), int((neg & hit).sum()), int((pos & ~hit).sum())
+
+
 def score_frame(
     pred: np.ndarray, gt: np.ndarray, min_object_px: int = 20, hit_fraction: float = 0.1
 ) -> Counts:
@@ -134,6 +165,7 @@ def score_frame(
             continue
         c.objects += 1
         c.objects_hit += bool(flagged[labels == label].mean() >= hit_fraction)
+    c.cell_tp, c.cell_fp, c.cell_fn = cell_counts(flagged, positive, positive | ignore)
     moving_or_unknown = positive | (gt == 170)
     n, labels = cv2.connectedComponents(flagged.astype(np.uint8), connectivity=8)
     if n > 1:
@@ -205,6 +237,7 @@ COLUMNS = (
     "f_measure",
     "object_recall",
     "false_alarm_regions_per_frame",
+    "cell_f1",
     "frames",
 )
 
@@ -231,6 +264,7 @@ def format_table(rows: list[dict]) -> str:
         "F",
         "obj.rec",
         "FA/frm",
+        "cellF1",
         "frames",
     ]
     lines = ["  ".join(f"{h:>8s}" if i else f"{h:<16s}" for i, h in enumerate(heads))]

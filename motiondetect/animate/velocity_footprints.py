@@ -1,0 +1,198 @@
+"""Detector 2 on the full velocity: animate motion (section 4).
+
+The paper's footprint of a measurement is where similar motion may appear
+next: the point moved by its velocity, widened by the speed change a
+smooth (rigid, inertial) world allows (Figure 8). With the 2-D velocity
+the footprint need not be drawn: each current pixel ``q`` names where it
+came from, ``q - v(q)``, so the *prediction* is the velocity the previous
+frame had there, and the test is whether the new velocity is within the
+smooth-change allowance of it.
+
+Both velocities are taken after removing each frame's dominant-plane
+velocity (the fitted homography), which plays the role of the paper's
+observer-motion compensation: a camera's rotational jitter changes every
+velocity at once, and the plane fit absorbs it.
+
+Only points whose current velocity is itself off the plane are tested.
+Background uncovered at a mover's trailing edge "comes from" where the
+mover was, so without this it would be flagged at every edge; the price
+is that a mover that stops dead is not flagged by this detector on the
+frame it stops (the constraint ray filter still sees any motion it has).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
+from motiondetect.constraint_ray.velocity_filter import hysteresis
+from motiondetect.detection.base import DetectorOutput
+from motiondetect.measurement.dense_flow import VelocityField
+
+NAME = "velocity-animate"
+_SQUARE3 = np.ones((3, 3), np.uint8)
+
+
+@dataclass(frozen=True)
+class VelocityAnimateConfig:
+    """Settings of the animate-motion detector on the 2-D velocity.
+
+    Attributes
+    ----------
+    noise_sigmas : float
+        Measurement tolerance in robust noise sigmas of the frame's residual.
+    floor_px : float
+        Smallest measurement tolerance, work px/frame.
+    accel_px : float
+        Speed change per frame a smooth world allows, work px/frame.
+    accel_relative : float
+        Further allowance proportional to the previous speed.
+    spread_px : float
+        The footprint reaches this far around the predicted point, work px
+        (the dense flow's patch smooths motion boundaries by about as much).
+    open_px : int
+        Morphological opening of the violations, work px. Dense flow is
+        smoothed over its patch, so a thin band of background beside every
+        mover borrows the mover's velocity and "came from" background; the
+        opening removes that band, while a reversing mover violates whole.
+    memory_frames : int
+        An object that broke its motion stays animate this many frames: the
+        label is carried with the object, moved by its velocity, so a limb
+        reversing every few frames is flagged between reversals too.
+    fit : FitConfig
+    """
+
+    noise_sigmas: float = 3.0
+    floor_px: float = 1.0
+    accel_px: float = 0.75
+    accel_relative: float = 0.1
+    open_px: int = 5
+    spread_px: float = 6.0
+    memory_frames: int = 8
+    fit: FitConfig = field(default_factory=FitConfig)
+
+    def __post_init__(self) -> None:
+        for name in ("noise_sigmas", "floor_px"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
+        for name in ("accel_px", "accel_relative"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must not be negative, but got {getattr(self, name)}")
+
+
+def predicted_residual(
+    previous: np.ndarray, field: VelocityField, offset: tuple[float, float] = (0.0, 0.0)
+) -> np.ndarray:
+    """The previous frame's residual velocity at where each current pixel came from.
+
+    Parameters
+    ----------
+    previous : (h, w, 2) ndarray of float32
+    field : VelocityField
+    offset : (dx, dy)
+        Shift of the source point, work px (the footprint's spread).
+
+    Returns
+    -------
+    (h, w, 2) ndarray of float32; points that came from outside the frame
+    get NaN.
+    """
+    source = field.pixel_grid - field.velocity_px + np.float32(offset)
+    return cv2.remap(
+        previous,
+        source[..., 0],
+        source[..., 1],
+        cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=(np.nan, np.nan),
+    )
+
+
+def violations(
+    residual: np.ndarray,
+    predictions: list[np.ndarray],
+    tolerance: float,
+    config: VelocityAnimateConfig,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the velocity broke its smooth continuation.
+
+    Parameters
+    ----------
+    residual : (h, w, 2) ndarray of float32
+    predictions : list of (h, w, 2) ndarray
+        The previous residual at each point of the footprint; the velocity
+        is smooth when it continues *any* of them.
+
+    Returns
+    -------
+    mask : (h, w) ndarray of bool
+    excess : (h, w) ndarray of float32
+        Change beyond the allowance, px/frame (0 where none).
+    """
+    excess = None
+    for predicted in predictions:
+        change = np.hypot(*(residual - predicted).transpose(2, 0, 1))
+        speed_before = np.hypot(predicted[..., 0], predicted[..., 1])
+        allowance = tolerance + config.accel_px + config.accel_relative * speed_before
+        this = np.nan_to_num(change - allowance, nan=0.0)
+        excess = this if excess is None else np.minimum(excess, this)
+    moving = np.hypot(residual[..., 0], residual[..., 1]) > tolerance
+    mask = moving & (excess > 0)
+    kernel = np.ones((config.open_px, config.open_px), np.uint8) if config.open_px > 1 else _SQUARE3
+    mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, kernel) > 0
+    return mask, np.maximum(excess, 0.0).astype(np.float32)
+
+
+class VelocityAnimateDetector:
+    """Flags velocities that break the smooth continuation of the previous frame's.
+
+    State: the previous frame's residual velocity field and the animate
+    memory (frames left, per pixel).
+    """
+
+    name = NAME
+    measurement = "velocity"
+    config_type = VelocityAnimateConfig
+
+    def __init__(self, config: VelocityAnimateConfig | None = None, egomotion=None) -> None:
+        self.config = config or VelocityAnimateConfig()
+        self._previous: np.ndarray | None = None
+        self._memory: np.ndarray | None = None
+
+    def reset(self) -> None:
+        self._previous, self._memory = None, None
+
+    def _remember(self, violation: np.ndarray, field: VelocityField) -> np.ndarray:
+        """Frames left of each pixel's animate label, carried along the motion."""
+        memory = np.where(violation, self.config.memory_frames, 0).astype(np.float32)
+        if self._memory is not None and self._memory.shape == violation.shape:
+            source = field.pixel_grid - field.velocity_px
+            carried = cv2.remap(
+                self._memory, source[..., 0], source[..., 1], cv2.INTER_NEAREST,
+                borderMode=cv2.BORDER_CONSTANT, borderValue=0,
+            )  # fmt: skip
+            memory = np.maximum(memory, carried - 1)
+        self._memory = memory
+        return memory > 0
+
+    def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
+        cfg = self.config
+        fit = field.camera if field.camera is not None else fit_camera(field, cfg.fit)
+        previous, self._previous = self._previous, fit.residual_px
+        if not fit.reliable or previous is None or previous.shape != field.velocity_px.shape:
+            return DetectorOutput.empty(field.shape, camera=fit)
+        tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
+        spread = cfg.spread_px
+        offsets = [(0.0, 0.0), (spread, 0.0), (-spread, 0.0), (0.0, spread), (0.0, -spread)]
+        predictions = [predicted_residual(previous, field, o) for o in offsets]
+        violation, excess = violations(fit.residual_px, predictions, tolerance, cfg)
+        animate = self._remember(violation, field)
+        speed = np.hypot(fit.residual_px[..., 0], fit.residual_px[..., 1])
+        mask = hysteresis(speed, tolerance, 1.0, seeds=animate)
+        strength = np.where(mask, speed / (speed + tolerance), 0.0).astype(np.float32)
+        return DetectorOutput.from_mask(
+            mask, strength, camera=fit, extra={"violations": int(violation.sum())}
+        )

@@ -1,0 +1,347 @@
+"""The observer's motion fitted to the 2-D velocity field: plane plus parallax.
+
+In a rigid world the image velocity of each point lies on a 1-D locus set
+by the observer's motion (section 3; Figure 2). With the full velocity we
+can fit that motion instead of matching the five canonical classes:
+
+1. **Dominant plane.** A homography, fitted by RANSAC to the velocity
+   sampled on a grid, absorbs the rotation and the motion of the dominant
+   surface (or of the plane at infinity).
+2. **Parallax.** What a rigid point has left over lies on the line through
+   it and the epipole (the focus of expansion), its length set by the
+   point's depth off the plane (Irani & Anandan 1998; docs/maths.md). That
+   line *is* Nelson's constraint ray with the rotation taken out.
+3. **Degenerate cases.** A planar scene or a pure rotation leaves no
+   parallax; then any residual is independent motion. A single mover's
+   residuals are parallel and so fit *some* epipole; an epipole is
+   therefore accepted only when its support is spread over the frame.
+
+Everything here is a pure function of one frame's field and, for the
+epipole, the previous frame's estimate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from motiondetect.measurement.dense_flow import VelocityField
+
+#: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
+_MEDIAN_TO_SIGMA = 1.0 / np.sqrt(2.0 * np.log(2.0))
+#: Median speed below which a frame without parallax counts as static, px/frame.
+STATIC_SPEED_PX = 0.3
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """Settings of the observer-motion fit.
+
+    Attributes
+    ----------
+    sample_step_px : int
+        Grid step of the velocity samples fed to RANSAC, work px.
+    ransac_px : float
+        RANSAC inlier threshold, work px/frame.
+    min_inlier_share : float
+        Below this share of homography inliers the frame cannot be judged.
+    max_speed_px : float
+        Median speed above which the motion is outside the measurable band.
+    cut_grey : float
+        Mean absolute grey difference between the frame and the previous
+        one warped by the fit above which the frame is taken as a cut.
+    parallax_sigmas : float
+        Residuals above this many noise sigmas count as parallax evidence.
+    min_parallax_blocks : int
+        The epipole's support must cover at least this many of the 4x4
+        blocks of the frame (a mover's parallel residuals cover few).
+    parallax : bool
+        Fit an epipole and test only the residual across each point's ray.
+        Off by default: measured on every data set, the fitted epipole was
+        captured by movers (one mover's parallel residuals fit an epipole
+        at infinity) more often than it explained real parallax, and cost
+        recall everywhere (docs/detectors.md). Without it the ray of every
+        point is the plane's velocity alone, and any residual is tested.
+    """
+
+    sample_step_px: int = 4
+    ransac_px: float = 1.0
+    min_inlier_share: float = 0.25
+    max_speed_px: float = 30.0
+    cut_grey: float = 40.0
+    parallax_sigmas: float = 4.0
+    min_parallax_blocks: int = 6
+    parallax: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("sample_step_px", "ransac_px", "max_speed_px", "cut_grey", "parallax_sigmas"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
+        if not 0 <= self.min_inlier_share < 1:
+            raise ValueError(f"min_inlier_share must be in [0, 1), got {self.min_inlier_share}")
+
+
+@dataclass(frozen=True)
+class CameraFit:
+    """One frame's fitted observer motion.
+
+    Attributes
+    ----------
+    homography : (3, 3) ndarray of float64 or None
+        Maps current work pixels to previous ones for the dominant plane.
+    residual_px : (h, w, 2) ndarray of float32 or None
+        Velocity minus the plane's velocity, work px/frame.
+    noise_px : float
+        Robust sigma of one residual component, from the RANSAC inliers.
+    inlier_share : float
+        Share of samples the homography explains: the fit's confidence.
+    epipole : (3,) ndarray of float64 or None
+        Homogeneous epipole in work pixels (third component 0: at infinity);
+        None when there is no usable parallax.
+    reason : str
+        Empty when the frame can be judged; otherwise why not.
+    """
+
+    homography: np.ndarray | None
+    residual_px: np.ndarray | None
+    noise_px: float
+    inlier_share: float
+    epipole: np.ndarray | None
+    reason: str = ""
+    median_speed_px: float = 0.0
+
+    @property
+    def reliable(self) -> bool:
+        return not self.reason
+
+    @property
+    def class_id(self) -> int:
+        """The canonical class (section 3.1) this fitted motion falls in.
+
+        0 static; 1 no parallax (rotation, or a planar scene) or parallax
+        from a distant epipole (translation across the view); 2 parallax
+        toward an epipole inside the frame (forward motion, with or without
+        rotation: classes 2 and 4 differ only in the part the plane fit
+        removes); -1 when the frame cannot be judged.
+        """
+        if self.homography is None or self.reason:
+            return -1
+        if self.epipole is None:
+            return 0 if self.median_speed_px < STATIC_SPEED_PX else 1
+        return 2 if abs(self.epipole[2]) > 1e-6 else 1
+
+    @property
+    def label(self) -> str:
+        """A short name of the fitted motion."""
+        if self.class_id < 0:
+            return "unreliable"
+        if self.epipole is None:
+            return "static" if self.class_id == 0 else "plane (no parallax)"
+        return "parallax, epipole " + ("ahead" if self.class_id == 2 else "at infinity")
+
+    def to_json(self) -> dict:
+        return {
+            "name": self.label,
+            "confidence": round(float(self.inlier_share), 4),
+            "noise_px": round(float(self.noise_px), 4),
+            "epipole": None if self.epipole is None else [round(float(v), 4) for v in self.epipole],
+        }
+
+
+def samples(field: VelocityField, step: int) -> tuple[np.ndarray, np.ndarray]:
+    """Grid samples away from the border: points and their velocities, (N, 2) each."""
+    h, w = field.shape
+    b = step
+    pts = field.pixel_grid[b : h - b : step, b : w - b : step].reshape(-1, 2)
+    vel = field.velocity_px[b : h - b : step, b : w - b : step].reshape(-1, 2)
+    return pts, vel
+
+
+def plane_residual(field: VelocityField, homography: np.ndarray) -> np.ndarray:
+    """Velocity left after the dominant plane's, at every work pixel.
+
+    Returns
+    -------
+    (h, w, 2) ndarray of float32, work px/frame
+    """
+    grid = field.pixel_grid
+    h, w = field.shape
+    previous = cv2.perspectiveTransform(grid.reshape(-1, 1, 2), homography).reshape(h, w, 2)
+    plane_velocity = grid - previous
+    return (field.velocity_px - plane_velocity).astype(np.float32)
+
+
+def fit_homography(
+    points: np.ndarray, velocity: np.ndarray, threshold_px: float
+) -> tuple[np.ndarray | None, np.ndarray]:
+    """RANSAC homography from current points to where they were.
+
+    Returns
+    -------
+    homography : (3, 3) ndarray or None
+    inliers : (N,) ndarray of bool
+    """
+    if len(points) < 8:
+        return None, np.zeros(len(points), bool)
+    homography, mask = cv2.findHomography(
+        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
+    )
+    if homography is None or mask is None:
+        return None, np.zeros(len(points), bool)
+    return homography, mask.ravel().astype(bool)
+
+
+def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None) -> np.ndarray:
+    """How far each residual lies off its point's constraint ray, px/frame.
+
+    Parameters
+    ----------
+    residual : (..., 2) ndarray
+    points : (..., 2) ndarray
+        Work pixels of the residuals.
+    epipole : (3,) ndarray or None
+        Homogeneous. None: no parallax is expected, so the whole residual
+        is off the ray.
+
+    Returns
+    -------
+    (...) ndarray of float32
+        The component of the residual across the line through the point
+        and the epipole (its length where the point is within 1 px of it).
+    """
+    magnitude = np.hypot(residual[..., 0], residual[..., 1])
+    if epipole is None:
+        return magnitude.astype(np.float32)
+    ux = epipole[0] - epipole[2] * points[..., 0]
+    uy = epipole[1] - epipole[2] * points[..., 1]
+    norm = np.hypot(ux, uy)
+    across = np.abs(residual[..., 0] * uy - residual[..., 1] * ux) / np.maximum(norm, 1e-9)
+    near = norm < max(abs(float(epipole[2])), 1e-9)  # within 1 px of a finite epipole
+    return np.where(near, magnitude, across).astype(np.float32)
+
+
+def _lines(points: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """Homogeneous lines through each point along its residual, unit normals, (N, 3)."""
+    n = np.stack([-residual[:, 1], residual[:, 0]], axis=1)
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
+    return np.concatenate([n, -(n * points).sum(axis=1, keepdims=True)], axis=1)
+
+
+def _support(lines, points, residual, epipole, tol_px) -> np.ndarray:
+    return off_ray(residual, points, epipole) < tol_px
+
+
+def _blocks_covered(points: np.ndarray, shape: tuple[int, int]) -> int:
+    h, w = shape
+    bx = np.minimum((points[:, 0] * 4 / w).astype(int), 3)
+    by = np.minimum((points[:, 1] * 4 / h).astype(int), 3)
+    return len(np.unique(by * 4 + bx))
+
+
+def fit_epipole(
+    points: np.ndarray,
+    residual: np.ndarray,
+    tol_px: float,
+    shape: tuple[int, int],
+    config: FitConfig,
+    previous: np.ndarray | None = None,
+    rng: np.random.Generator | None = None,
+) -> np.ndarray | None:
+    """The epipole that the parallax residuals point to or from, or None.
+
+    Parameters
+    ----------
+    points, residual : (N, 2) ndarray
+        Samples whose residual is well above the noise.
+    tol_px : float
+        Largest off-ray distance of a supporting residual.
+    shape : (h, w)
+        Work frame size, for the spread test.
+    previous : (3,) ndarray, optional
+        Last frame's epipole, tried first (a camera's heading changes slowly).
+
+    Returns
+    -------
+    (3,) ndarray of float64 or None
+        Unit-norm homogeneous epipole; None when the support is too small
+        or too concentrated to be parallax rather than a mover.
+    """
+    if len(points) < 2 * config.min_parallax_blocks:
+        return None
+    rng = rng or np.random.default_rng(0)
+    lines = _lines(points, residual)
+    hypotheses = [previous] if previous is not None else []
+    pairs = rng.integers(0, len(points), size=(64, 2))
+    hypotheses += [np.cross(lines[i], lines[j]) for i, j in pairs if i != j]
+    best, best_support = None, None
+    for e in hypotheses:
+        norm = np.linalg.norm(e)
+        if norm < 1e-12:
+            continue
+        support = _support(lines, points, residual, e / norm, tol_px)
+        if best_support is None or support.sum() > best_support.sum():
+            best, best_support = e / norm, support
+    if best is None or best_support.mean() < 0.6:
+        return None
+    if _blocks_covered(points[best_support], shape) < config.min_parallax_blocks:
+        return None
+    # Least squares over the support: the point closest to all its lines.
+    _, _, vt = np.linalg.svd(lines[best_support])
+    refined = vt[-1]
+    return refined if np.dot(refined, best) >= 0 else -refined
+
+
+def _reason(homography, share, speed, cut, config: FitConfig) -> str:
+    if homography is None or share < config.min_inlier_share:
+        return "too few inliers"
+    if speed > config.max_speed_px:
+        return "motion beyond the band"
+    if cut > config.cut_grey:
+        return "cut"
+    return ""
+
+
+def fit_camera(
+    field: VelocityField, config: FitConfig, previous_epipole: np.ndarray | None = None
+) -> CameraFit:
+    """Fit the observer's motion to one frame's velocity field.
+
+    Parameters
+    ----------
+    field : VelocityField
+    config : FitConfig
+    previous_epipole : (3,) ndarray, optional
+
+    Returns
+    -------
+    CameraFit
+        With ``reason`` set (and no residual) when the frame cannot be judged.
+    """
+    points, velocity = samples(field, config.sample_step_px)
+    speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
+    homography, inliers = fit_homography(points, velocity, config.ransac_px)
+    share = float(inliers.mean()) if len(inliers) else 0.0
+    cut = 0.0
+    if homography is not None:
+        h, w = field.shape
+        warped = cv2.warpPerspective(
+            field.previous_grey, homography, (w, h), flags=cv2.WARP_INVERSE_MAP
+        )
+        cut = float(cv2.absdiff(warped, field.grey)[8:-8, 8:-8].mean())
+    reason = _reason(homography, share, speed, cut, config)
+    if reason:
+        return CameraFit(homography, None, 0.0, share, None, reason, speed)
+    residual = plane_residual(field, homography)
+    step = config.sample_step_px
+    sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)[: len(points)]
+    magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
+    noise = float(np.median(magnitude[inliers]) * _MEDIAN_TO_SIGMA) if inliers.any() else 0.0
+    epipole = None
+    if config.parallax:
+        big = magnitude > config.parallax_sigmas * max(noise, 0.05)
+        epipole = fit_epipole(
+            points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape, config, previous_epipole
+        )
+    return CameraFit(homography, residual, noise, share, epipole, "", speed)

@@ -1,0 +1,166 @@
+"""Detector 1 on the full velocity: the constraint ray in velocity space.
+
+Section 3 of the paper states the test for the 2-D velocity: a rigid
+point's velocity lies on the segment ``V_w + s V_XY``, ``s`` in ``[0, a]``
+(Figure 2), so a velocity off that segment is independent motion. The
+normal-flow filter (:mod:`.normal_filter`) tests only the projection of
+that segment on the gradient; here the velocity itself is tested.
+
+* **Fitted observer motion** (default): after the dominant plane's
+  velocity is removed, the ray runs through the point toward or away from
+  the epipole (:mod:`.camera_fit`); the distance *across* it is the test.
+  Without usable parallax the ray shrinks to a point and the whole
+  residual is tested.
+* **Known ego-motion** (``--egomotion``): the exact segment per point,
+  shortened by the depth bound, as in the normal-flow path.
+
+A point is flagged when it lies off the ray by more than a tolerance set
+by the frame's measured noise (``noise_sigmas`` robust sigmas, at least
+``floor_px``). Flagged points are grown by hysteresis over their
+neighbours that lie off the ray by half as much, so a mover is found
+whole rather than at its strongest edges. Movers that travel *along*
+their ray are invisible to this test (the blind spot, section 3.3).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, off_ray
+from motiondetect.constraint_ray.observer_motion import ObserverMotion
+from motiondetect.detection.base import DetectorOutput
+from motiondetect.measurement.dense_flow import VelocityField
+
+NAME = "velocity-ray"
+_SQUARE3 = np.ones((3, 3), np.uint8)
+
+
+@dataclass(frozen=True)
+class VelocityRayConfig:
+    """Settings of the velocity-space constraint ray filter.
+
+    Attributes
+    ----------
+    noise_sigmas : float
+        Tolerance in robust noise sigmas of the frame's residual.
+    floor_px : float
+        Smallest tolerance, work px/frame.
+    grow_ratio : float
+        Hysteresis: flagged regions grow over points off the ray by at
+        least this share of the tolerance.
+    close_px : int
+        Morphological closing that joins the fragments of one mover, work px.
+    fit : FitConfig
+    """
+
+    noise_sigmas: float = 3.0
+    floor_px: float = 1.0
+    grow_ratio: float = 0.5
+    close_px: int = 5
+    fit: FitConfig = field(default_factory=FitConfig)
+
+    def __post_init__(self) -> None:
+        for name in ("noise_sigmas", "floor_px"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
+        if not 0 < self.grow_ratio <= 1:
+            raise ValueError(f"grow_ratio must be in (0, 1], but got {self.grow_ratio}")
+        if self.close_px < 0:
+            raise ValueError(f"close_px must not be negative, but got {self.close_px}")
+
+
+def distance_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):
+    """Distance of each velocity from the segment ``start + s * step``, ``s`` in [0, bound].
+
+    Parameters
+    ----------
+    velocity, start, step : (..., 2) ndarray, px/frame
+    bound : float
+
+    Returns
+    -------
+    (...) ndarray of float32
+    """
+    d = velocity - start
+    length2 = (step * step).sum(axis=-1)
+    s = np.where(length2 > 1e-12, (d * step).sum(axis=-1) / np.maximum(length2, 1e-12), 0.0)
+    s = np.clip(s, 0.0, bound)[..., None]
+    gap = d - s * step
+    return np.hypot(gap[..., 0], gap[..., 1]).astype(np.float32)
+
+
+def known_ray_distance(field: VelocityField, model: ObserverMotion) -> np.ndarray:
+    """Off-ray distance under known ego-motion, (h, w) float32 work px/frame."""
+    h, w = field.shape
+    start = cv2.resize(model.rotation_px, (w, h), interpolation=cv2.INTER_LINEAR)
+    step = cv2.resize(model.translation_px, (w, h), interpolation=cv2.INTER_LINEAR)
+    return distance_to_segment(field.velocity_px, start, step, model.depth_bound)
+
+
+def hysteresis(
+    distance: np.ndarray, tolerance: float, grow_ratio: float, seeds: np.ndarray | None = None
+) -> np.ndarray:
+    """Points off the ray by ``tolerance`` (opened 3x3), grown over those off by
+    ``grow_ratio * tolerance`` that connect to them. (h, w) bool.
+
+    ``seeds`` (bool), when given, replaces the strong points as the seeds."""
+    if seeds is None:
+        seeds = distance > tolerance
+    strong = cv2.morphologyEx(seeds.astype(np.uint8), cv2.MORPH_OPEN, _SQUARE3)
+    weak = (distance > grow_ratio * tolerance).astype(np.uint8)
+    count, labels = cv2.connectedComponents(weak, connectivity=8)
+    keep = np.zeros(count, bool)
+    keep[np.unique(labels[strong > 0])] = True
+    keep[0] = False
+    return keep[labels]
+
+
+class VelocityRayDetector:
+    """Flags velocities no rigid world under the fitted (or known) motion allows.
+
+    State: the previous epipole, tried first in the next frame's fit.
+    """
+
+    name = NAME
+    measurement = "velocity"
+    config_type = VelocityRayConfig
+
+    def __init__(self, config: VelocityRayConfig | None = None, egomotion=None) -> None:
+        self.config = config or VelocityRayConfig()
+        self.egomotion = egomotion
+        self._epipole: np.ndarray | None = None
+
+    def reset(self) -> None:
+        self._epipole = None
+
+    def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
+        """Detect independent motion in one frame's velocity field."""
+        cfg = self.config
+        fit = field.camera
+        if fit is None:
+            fit = fit_camera(field, cfg.fit, self._epipole)
+            self._epipole = fit.epipole
+        known = self.egomotion(frame_index, field.geometry) if self.egomotion else None
+        if not fit.reliable and known is None:
+            return DetectorOutput.empty(field.shape, camera=fit)
+        tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
+        if known is not None:
+            distance = known_ray_distance(field, known)
+        else:
+            distance = off_ray(fit.residual_px, field.pixel_grid, fit.epipole)
+        mask = hysteresis(distance, tolerance, cfg.grow_ratio)
+        if cfg.close_px > 1:
+            kernel = np.ones((cfg.close_px, cfg.close_px), np.uint8)
+            mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, kernel) > 0
+        strength = np.where(mask, distance / (distance + tolerance), 0.0).astype(np.float32)
+        return DetectorOutput.from_mask(mask, strength, camera=_with_known(fit, known))
+
+
+def _with_known(fit: CameraFit, known: ObserverMotion | None) -> CameraFit:
+    """A fit that known ego-motion made reliable keeps its numbers but no reason."""
+    if known is None or fit.reliable:
+        return fit
+    return CameraFit(fit.homography, fit.residual_px, fit.noise_px, 1.0, None, "", 0.0)

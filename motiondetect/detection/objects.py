@@ -1,0 +1,171 @@
+"""Objects, not fragments: flagged pixels grouped into movers, kept as tracks.
+
+1. **Group.** Flagged pixels closer than ``gap_px`` belong to one object
+   (one walker is one box, not three); holes inside an object are filled.
+2. **Track.** Each object is matched to the track whose box, moved by the
+   track's own image velocity (which includes the camera's motion), it
+   overlaps most. Tracks keep a stable integer id.
+3. **Persist.** An object is reported once its track has been seen on
+   ``persistence`` frames; a track survives ``max_missed`` frames unseen.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    """Settings of grouping and tracking.
+
+    Attributes
+    ----------
+    gap_px : int
+        Flagged pixels this close (work px) join one object.
+    min_area_share : float
+        Smallest object, as a share of the frame's area.
+    persistence : int
+        Frames a track must be seen on before its objects are reported.
+    max_missed : int
+        Frames a track may go unseen before it ends.
+    min_iou : float
+        Smallest overlap of a predicted track box and an object box that
+        continues the track.
+    """
+
+    gap_px: int = 6
+    min_area_share: float = 0.0005
+    persistence: int = 2
+    max_missed: int = 5
+    min_iou: float = 0.1
+
+    def __post_init__(self) -> None:
+        if self.persistence < 1:
+            raise ValueError(f"persistence must be at least 1, but got {self.persistence}")
+        if self.gap_px < 0 or self.max_missed < 0:
+            raise ValueError("gap_px and max_missed must not be negative")
+
+
+@dataclass(frozen=True)
+class MovingObject:
+    """One grouped object in one frame (work pixels)."""
+
+    mask: np.ndarray  # (h, w) bool
+    box: tuple[float, float, float, float]  # x0, y0, x1, y1
+    velocity_px: tuple[float, float]  # mean image velocity
+    track: int = 0
+    age: int = 1
+
+
+def group_objects(
+    flagged: np.ndarray, velocity: np.ndarray, config: TrackConfig
+) -> list[MovingObject]:
+    """Group flagged pixels into objects.
+
+    Parameters
+    ----------
+    flagged : (h, w) ndarray of bool
+    velocity : (h, w, 2) ndarray of float32
+        Image velocity, work px/frame.
+    config : TrackConfig
+
+    Returns
+    -------
+    list of MovingObject, largest first, with holes filled.
+    """
+    h, w = flagged.shape
+    mask = flagged.astype(np.uint8)
+    joined = mask
+    if config.gap_px > 0:
+        k = 2 * (config.gap_px // 2) + 1
+        joined = cv2.dilate(mask, np.ones((k, k), np.uint8))
+    count, labels = cv2.connectedComponents(joined, connectivity=8)
+    labels = np.where(mask > 0, labels, 0)
+    min_area = config.min_area_share * h * w
+    objects = []
+    for label in range(1, count):
+        own = (labels == label).astype(np.uint8)
+        if own.sum() < min_area:
+            continue
+        contours, _ = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        cv2.drawContours(own, contours, -1, 1, thickness=cv2.FILLED)
+        x, y, bw, bh = cv2.boundingRect(own)
+        filled = own > 0
+        v = velocity[filled].mean(axis=0)
+        objects.append(MovingObject(filled, (x, y, x + bw, y + bh), (float(v[0]), float(v[1]))))
+    objects.sort(key=lambda o: -(o.box[2] - o.box[0]) * (o.box[3] - o.box[1]))
+    return objects
+
+
+def box_iou(a: tuple, b: tuple) -> float:
+    """Intersection over union of two (x0, y0, x1, y1) boxes."""
+    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
+    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
+    inter = ix * iy
+    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
+    return inter / union if union > 0 else 0.0
+
+
+@dataclass
+class _Track:
+    id: int
+    box: tuple[float, float, float, float]
+    velocity: tuple[float, float]
+    age: int = 1
+    missed: int = 0
+
+    def predicted(self) -> tuple[float, float, float, float]:
+        dx, dy = self.velocity
+        x0, y0, x1, y1 = self.box
+        return (x0 + dx, y0 + dy, x1 + dx, y1 + dy)
+
+
+class Tracker:
+    """Stable ids for objects across frames. State: the live tracks."""
+
+    def __init__(self, config: TrackConfig | None = None) -> None:
+        self.config = config or TrackConfig()
+        self.reset()
+
+    def reset(self) -> None:
+        self._tracks: list[_Track] = []
+        self._next_id = 1
+
+    def coast(self) -> None:
+        """A frame without judgement: tracks age toward their end, none is matched."""
+        for track in self._tracks:
+            track.missed += 1
+        self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
+
+    def update(self, objects: list[MovingObject]) -> list[MovingObject]:
+        """Match this frame's objects to tracks; return the confirmed ones with ids."""
+        cfg = self.config
+        free = list(range(len(self._tracks)))
+        confirmed = []
+        for obj in objects:
+            best, best_iou = None, cfg.min_iou
+            for i in free:
+                iou = box_iou(self._tracks[i].predicted(), obj.box)
+                if iou >= best_iou:
+                    best, best_iou = i, iou
+            if best is None:
+                track = _Track(self._next_id, obj.box, obj.velocity_px)
+                self._next_id += 1
+                self._tracks.append(track)
+            else:
+                free.remove(best)
+                track = self._tracks[best]
+                track.box, track.velocity = obj.box, obj.velocity_px
+                track.age, track.missed = track.age + 1, 0
+            if track.age >= cfg.persistence:
+                confirmed.append(
+                    MovingObject(obj.mask, obj.box, obj.velocity_px, track.id, track.age)
+                )
+        matched = {t.id for t in self._tracks} - {self._tracks[i].id for i in free}
+        for i in free:
+            self._tracks[i].missed += 1
+        self._tracks = [t for t in self._tracks if t.id in matched or t.missed <= cfg.max_missed]
+        return confirmed

@@ -1,0 +1,154 @@
+"""2-D image velocity: the full flow the paper's section 3 is stated for.
+
+Nelson measured only normal flow because full flow was too expensive in
+1991 (section 3.2). Here each frame gets a dense velocity field from
+OpenCV's DIS optical flow (Kroeger et al., ECCV 2016), coarse to fine, so
+large motions are measured too. docs/stages.md compares it with the
+least-squares velocity from the normal-flow stages (NOTES section 6).
+
+:class:`DenseFlow` holds the one-frame delay, like the normal-flow
+pipeline; the field is given at the *current* frame's pixels, so masks
+built from it line up with the frame being reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, Literal
+
+import cv2
+import numpy as np
+
+from motiondetect.measurement import stages
+from motiondetect.measurement.normal_flow import GridGeometry
+
+PRESETS = {
+    "ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
+    "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
+    "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM,
+}
+
+
+@dataclass(frozen=True)
+class DenseFlowConfig:
+    """Settings of the 2-D velocity measurement.
+
+    Attributes
+    ----------
+    work_size : int
+        Long side of the working resolution, px; never above the input's
+        (frames are only ever reduced). Velocities are in work px/frame.
+    preset : {"ultrafast", "fast", "medium"}
+        DIS preset (docs/stages.md measures accuracy and cost of each).
+    """
+
+    work_size: int = 320
+    preset: Literal["ultrafast", "fast", "medium"] = "medium"
+
+    def __post_init__(self) -> None:
+        if self.work_size < stages.MIN_FRAME_SIDE:
+            raise ValueError(f"work_size must be at least 64, but got {self.work_size}")
+        if self.preset not in PRESETS:
+            raise ValueError(f"preset must be one of {sorted(PRESETS)}, but got {self.preset!r}")
+
+
+@dataclass(frozen=True)
+class VelocityField:
+    """One frame's dense image velocity.
+
+    Attributes
+    ----------
+    velocity_px : (h, w, 2) ndarray of float32
+        (vx, vy) of each current-frame pixel, work px/frame: the pixel was at
+        ``p - velocity`` in the previous frame.
+    grey : (h, w) ndarray of uint8
+        The current frame at working size.
+    previous_grey : (h, w) ndarray of uint8
+    geometry : GridGeometry
+        Input and working sizes; the 64x64 grid maps onto both.
+    camera : CameraFit, optional
+        The observer motion fitted to this field, attached once per frame
+        so that every detector shares it.
+    """
+
+    velocity_px: np.ndarray
+    grey: np.ndarray
+    previous_grey: np.ndarray
+    geometry: GridGeometry
+    camera: Any = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.grey.shape
+
+    @cached_property
+    def pixel_grid(self) -> np.ndarray:
+        """(h, w, 2) float32 (x, y) of every work pixel."""
+        h, w = self.grey.shape
+        ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
+        return np.stack([xs, ys], axis=-1)
+
+
+def working_grey(frame: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """An input frame as 8-bit grey at ``size`` (width, height), area-reduced.
+
+    Parameters
+    ----------
+    frame : (H, W) or (H, W, C) ndarray of uint8 or uint16
+    size : (width, height)
+        At most the frame's own size.
+
+    Returns
+    -------
+    (height, width) ndarray of uint8
+    """
+    grey = stages.to_grey(frame)
+    if grey.dtype != np.uint8:
+        grey = np.clip(grey, 0, 255).astype(np.uint8)
+    if (grey.shape[1], grey.shape[0]) != size:
+        grey = cv2.resize(grey, size, interpolation=cv2.INTER_AREA)
+    return grey
+
+
+class DenseFlow:
+    """Frames in, dense velocity fields out; the first frame gives ``None``."""
+
+    def __init__(self, config: DenseFlowConfig | None = None) -> None:
+        self.config = config or DenseFlowConfig()
+        self._dis = cv2.DISOpticalFlow_create(PRESETS[self.config.preset])
+        self._previous: np.ndarray | None = None
+        self._geometry: GridGeometry | None = None
+
+    def reset(self) -> None:
+        """Forget the delayed frame."""
+        self._previous = None
+
+    def geometry_for(self, width: int, height: int) -> GridGeometry:
+        work = stages.working_size(width, height, min(self.config.work_size, max(width, height)))
+        return GridGeometry((width, height), work)
+
+    def process(self, frame: np.ndarray) -> VelocityField | None:
+        """Measure the velocity between the previous frame and ``frame``.
+
+        Parameters
+        ----------
+        frame : (H, W) or (H, W, C) ndarray of uint8 or uint16
+
+        Returns
+        -------
+        VelocityField or None
+            None for the first frame.
+        """
+        stages.validate_frame(frame)
+        h, w = frame.shape[:2]
+        if self._geometry is None or self._geometry.input_size != (w, h):
+            self._geometry = self.geometry_for(w, h)
+            self._previous = None
+        grey = working_grey(frame, self._geometry.work_size)
+        previous, self._previous = self._previous, grey
+        if previous is None:
+            return None
+        # Flow from the current frame back to the previous one, at current pixels.
+        backward = self._dis.calc(grey, previous, None)
+        return VelocityField(-backward, grey, previous, self._geometry)

@@ -1,0 +1,191 @@
+"""The velocity path (issue 13): 2-D motion, the fitted observer motion, the
+constraint ray in velocity space, animate motion, objects and tracks.
+
+Scenes are a real photograph moved by exact warps, with textured squares
+pasted as movers, so every answer is known.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from skimage import data
+
+from motiondetect.animate.velocity_footprints import VelocityAnimateDetector
+from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera, off_ray
+from motiondetect.constraint_ray.velocity_filter import distance_to_segment
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker
+from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig
+
+W, H = 320, 240
+PHOTO = cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR)
+PATCH = cv2.resize(cv2.cvtColor(data.coffee(), cv2.COLOR_RGB2BGR), (48, 48))
+
+
+def background(dx: float, dy: float = 0.0, zoom: float = 1.0) -> np.ndarray:
+    """The photograph seen by a camera moved by (dx, dy) px and zoomed about the centre."""
+    c = np.array([256.0, 256.0])
+    m = np.array([[zoom, 0, (1 - zoom) * c[0] - dx - 96], [0, zoom, (1 - zoom) * c[1] - dy - 136]])
+    return cv2.warpAffine(PHOTO, m, (W, H), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+
+
+def paste(frame: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+    """The patch at sub-pixel (x, y), and its 0/255 mask."""
+    m = np.float32([[1, 0, x], [0, 1, y]])
+    patch = cv2.warpAffine(PATCH, m, (W, H), flags=cv2.INTER_CUBIC)
+    inside = cv2.warpAffine(np.ones((48, 48), np.float32), m, (W, H)) > 0.5
+    out = frame.copy()
+    out[inside] = patch[inside]
+    return out, inside
+
+
+@pytest.mark.parametrize("speed", [0.5, 3.0, 10.0, 25.0])
+def test_dense_flow_recovers_known_translation(speed):
+    flow = DenseFlow(DenseFlowConfig(work_size=W))
+    flow.process(background(0.0))
+    field = flow.process(background(speed))
+    v = field.velocity_px[20:-20, 20:-20].reshape(-1, 2)
+    error = np.hypot(v[:, 0] + speed, v[:, 1])  # the scene moves left as the camera pans right
+    assert np.median(error) < 0.1 + 0.01 * speed
+    assert np.percentile(error, 90) < 0.5 + 0.03 * speed
+
+
+def test_dense_flow_never_upscales():
+    flow = DenseFlow(DenseFlowConfig(work_size=1000))
+    assert flow.geometry_for(W, H).work_size == (W, H)
+    assert flow.geometry_for(640, 480).work_size == (640, 480)
+
+
+def _field(a: np.ndarray, b: np.ndarray):
+    flow = DenseFlow(DenseFlowConfig(work_size=W))
+    flow.process(a)
+    return flow.process(b)
+
+
+def test_fit_explains_a_rigid_planar_scene():
+    field = _field(background(0.0, zoom=1.0), background(4.0, 1.0, zoom=1.02))
+    fit = fit_camera(field, FitConfig())
+    assert fit.reliable and fit.inlier_share > 0.8
+    r = fit.residual_px[16:-16, 16:-16]
+    assert np.percentile(np.hypot(r[..., 0], r[..., 1]), 95) < 0.5
+    assert fit.epipole is None  # a plane has no parallax
+
+
+def test_a_cut_is_unreliable_and_flags_nothing():
+    md = MotionDetector()
+    md.process(background(0.0), 0, 0.0)
+    other = cv2.resize(cv2.cvtColor(data.chelsea(), cv2.COLOR_RGB2BGR), (W, H))
+    result = md.process(other, 1, 0.03)
+    assert not result.reliable and result.reason in ("cut", "too few inliers")
+    assert result.regions == [] and not result.flagged.any()
+
+
+def test_off_ray_measures_across_the_line_to_the_epipole():
+    epipole = np.array([160.0, 120.0, 1.0])
+    points = np.array([[260.0, 120.0], [260.0, 120.0], [160.0, 20.0]])
+    residual = np.array([[3.0, 0.0], [0.0, 2.0], [1.5, -4.0]])
+    np.testing.assert_allclose(off_ray(residual, points, epipole), [0.0, 2.0, 1.5], atol=1e-6)
+    # The blind spot: any motion along the ray, however large, passes.
+    assert off_ray(np.array([[40.0, 0.0]]), points[:1], epipole)[0] == pytest.approx(0.0)
+    # At infinity (third component 0) every ray is parallel to the epipole's direction.
+    far = np.array([1.0, 0.0, 0.0])
+    np.testing.assert_allclose(off_ray(residual, points, far), [0.0, 2.0, 4.0], atol=1e-6)
+    # Without parallax the whole residual is off the ray.
+    np.testing.assert_allclose(off_ray(residual[:1], points[:1], None), [3.0])
+
+
+def test_distance_to_the_constraint_segment():
+    start, step = np.array([1.0, 0.0]), np.array([2.0, 0.0])
+    v = np.array([[1.0, 0.0], [4.0, 0.0], [9.0, 0.0], [2.0, 3.0], [-2.0, 0.0]])
+    got = distance_to_segment(v, start, step, bound=3.0)  # segment from x=1 to x=7
+    np.testing.assert_allclose(got, [0.0, 0.0, 2.0, 3.0, 3.0], atol=1e-6)
+
+
+def _pan_with_mover(path, frames=24, pan=2.0):
+    """Frames of a panning camera with the patch at ``path(t)``; masks too."""
+    out = []
+    for t in range(frames):
+        image, mask = paste(background(pan * t), *path(t))
+        out.append((image, mask))
+    return out
+
+
+def _hits(md: MotionDetector, clip, warmup: int = 3) -> list[bool]:
+    hits = []
+    for t, (image, mask) in enumerate(clip):
+        result = md.process(image, t, t / 30)
+        if t >= warmup:
+            flagged = result.input_mask(W, H) > 0
+            hits.append(flagged[mask].mean() >= 0.5)
+    return hits
+
+
+def test_constraint_ray_finds_a_whole_mover_under_a_pan():
+    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t))
+    md = MotionDetector("constraint-ray")
+    hits = _hits(md, clip)
+    assert np.mean(hits) >= 0.9
+
+
+def test_rigid_pan_flags_nothing():
+    md = MotionDetector()
+    for t in range(20):
+        result = md.process(background(2.5 * t, 0.3 * t), t, t / 30)
+        assert result.regions == [], t
+
+
+def waving(period_half: int, speed: float, frames: int = 30):
+    """Velocity +speed for period_half frames, then -speed: a reversing limb."""
+
+    def x(t: int) -> float:
+        pos, v = 130.0, speed
+        for i in range(t):
+            pos += v if (i // period_half) % 2 == 0 else -v
+        return pos
+
+    return lambda t: (x(t), 90.0)
+
+
+@pytest.mark.parametrize("period_half,speed", [(4, 10.0), (5, 12.0), (6, 15.0)])
+def test_animate_alone_flags_reversing_movers(period_half, speed):
+    clip = _pan_with_mover(waving(period_half, speed), frames=30, pan=1.5)
+    md = MotionDetector("animate", persistence=1)
+    hits = []
+    for t, (image, mask) in enumerate(clip):
+        result = md.process(image, t, t / 30)
+        if t >= 3:
+            out = result.outputs["velocity-animate"]
+            hits.append(bool(out.mask[mask].any()))
+    assert np.mean(hits) >= 0.7
+
+
+def test_animate_leaves_a_smooth_mover_alone():
+    clip = _pan_with_mover(lambda t: (60 + 4 * t, 100 + 1.0 * t), frames=24)
+    detector = VelocityAnimateDetector()
+    md = MotionDetector("animate", persistence=1)
+    flagged = []
+    for t, (image, _mask) in enumerate(clip):
+        result = md.process(image, t, t / 30)
+        if t >= 3:
+            flagged.append(bool(result.regions))
+    assert np.mean(flagged) <= 0.1
+    assert detector.name == "velocity-animate"
+
+
+def _obj(x0: float, v: float = 5.0) -> MovingObject:
+    mask = np.zeros((10, 10), bool)
+    return MovingObject(mask, (x0, 10.0, x0 + 20, 40.0), (v, 0.0))
+
+
+def test_tracker_keeps_ids_and_needs_persistence():
+    tracker = Tracker(TrackConfig(persistence=2))
+    assert tracker.update([_obj(0.0)]) == []  # seen once: not yet reported
+    second = tracker.update([_obj(5.0), _obj(200.0)])
+    assert [o.track for o in second] == [1]  # the new object at 200 waits a frame
+    third = tracker.update([_obj(10.0), _obj(205.0)])
+    assert sorted(o.track for o in third) == [1, 2]
+    tracker.coast()  # an unreliable frame: tracks survive it
+    fourth = tracker.update([_obj(20.0)])
+    assert [o.track for o in fourth] == [1]
