@@ -16,6 +16,7 @@ import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
+from motiondetect.detection.base import DETECTOR_SETS
 from motiondetect.io.video import count_decodable_frames
 
 from .scenes import scene
@@ -100,9 +101,18 @@ def test_finished_inputs_are_skipped_unless_overwrite(tmp_path, clip):
     "options",
     [
         ["--detector", "constraint-ray"],
-        ["--detector", "animate", "--first-appearance", "flag", "--no-jitter-compensation"],
-        ["--work-size", "256", "--arithmetic", "lut", "--no-pyramid"],
-        ["--ego-model", "paper", "--frames-fps", "25"],
+        ["--detector", "constraint-ray", "--measure", "normal"],
+        [
+            "--detector",
+            "animate",
+            "--measure",
+            "normal",
+            "--first-appearance",
+            "flag",
+            "--no-jitter-compensation",
+        ],
+        ["--measure", "normal", "--work-size", "256", "--arithmetic", "lut", "--no-pyramid"],
+        ["--measure", "normal", "--ego-model", "paper", "--frames-fps", "25"],
         ["--min-event-frames", "1", "--merge-gap-frames", "0", "--pad-frames", "0"],
         ["--no-timeline", "-v"],
         ["--persistence", "1"],
@@ -133,7 +143,8 @@ def test_options_reach_the_settings(tmp_path, clip, options):
             for det in json.loads(line)["detections"]
             for d in det["detectors"]
         }
-        assert found <= {pairs["--detector"]}
+        measure = pairs.get("--measure", "velocity")
+        assert found <= set(DETECTOR_SETS[measure][pairs["--detector"]])
 
 
 def test_config_file_sets_the_same_keys(tmp_path, clip):
@@ -329,6 +340,8 @@ def test_synth_and_evaluate_commands(tmp_path):
             "-q",
             "--egomotion",
             tmp_path / "s" / "scene.json",
+            "--measure",
+            "normal",
         ).exit_code
         == 0
     )
