@@ -53,6 +53,9 @@ class VelocityRayConfig:
         least this share of the tolerance.
     close_px : int
         Morphological closing that joins the fragments of one mover, work px.
+    edge_px : float
+        Width of the untested band along the frame edge, work px, on top of
+        the frame's median speed.
     fit : FitConfig
     """
 
@@ -60,6 +63,7 @@ class VelocityRayConfig:
     floor_px: float = 1.0
     grow_ratio: float = 0.5
     close_px: int = 5
+    edge_px: float = 4.0
     fit: FitConfig = field(default_factory=FitConfig)
 
     def __post_init__(self) -> None:
@@ -98,6 +102,21 @@ def known_ray_distance(field: VelocityField, model: ObserverMotion) -> np.ndarra
     start = cv2.resize(model.rotation_px, (w, h), interpolation=cv2.INTER_LINEAR)
     step = cv2.resize(model.translation_px, (w, h), interpolation=cv2.INTER_LINEAR)
     return distance_to_segment(field.velocity_px, start, step, model.depth_bound)
+
+
+def without_frame_edge(distance: np.ndarray, band_px: float) -> np.ndarray:
+    """Zero the band along the frame edge where content enters or leaves.
+
+    There the flow has no previous pixels to match and is extrapolated, so
+    its residual says nothing about independent motion (the normal-flow
+    detectors drop a border ring of cells for the same reason).
+    """
+    b = int(np.ceil(band_px))
+    if b <= 0:
+        return distance
+    out = distance.copy()
+    out[:b], out[-b:], out[:, :b], out[:, -b:] = 0, 0, 0, 0
+    return out
 
 
 def hysteresis(
@@ -151,6 +170,7 @@ class VelocityRayDetector:
             distance = known_ray_distance(field, known)
         else:
             distance = off_ray(fit.residual_px, field.pixel_grid, fit.epipole)
+        distance = without_frame_edge(distance, cfg.edge_px + fit.median_speed_px)
         mask = hysteresis(distance, tolerance, cfg.grow_ratio)
         if cfg.close_px > 1:
             kernel = np.ones((cfg.close_px, cfg.close_px), np.uint8)
