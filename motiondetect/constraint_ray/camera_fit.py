@@ -229,10 +229,6 @@ def _lines(points: np.ndarray, residual: np.ndarray) -> np.ndarray:
     return np.concatenate([n, -(n * points).sum(axis=1, keepdims=True)], axis=1)
 
 
-def _support(lines, points, residual, epipole, tol_px) -> np.ndarray:
-    return off_ray(residual, points, epipole) < tol_px
-
-
 def _blocks_covered(points: np.ndarray, shape: tuple[int, int]) -> int:
     h, w = shape
     bx = np.minimum((points[:, 0] * 4 / w).astype(int), 3)
@@ -280,7 +276,7 @@ def fit_epipole(
         norm = np.linalg.norm(e)
         if norm < 1e-12:
             continue
-        support = _support(lines, points, residual, e / norm, tol_px)
+        support = off_ray(residual, points, e / norm) < tol_px
         if best_support is None or support.sum() > best_support.sum():
             best, best_support = e / norm, support
     if best is None or best_support.mean() < 0.6:
@@ -335,7 +331,7 @@ def fit_camera(
         return CameraFit(homography, None, 0.0, share, None, reason, speed)
     residual = plane_residual(field, homography)
     step = config.sample_step_px
-    sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)[: len(points)]
+    sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
     magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
     noise = float(np.median(magnitude[inliers]) * _MEDIAN_TO_SIGMA) if inliers.any() else 0.0
     epipole = None

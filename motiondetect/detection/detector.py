@@ -27,7 +27,7 @@ from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_fro
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
-from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
@@ -164,8 +164,6 @@ class MotionDetector:
         if measure == "velocity":
             self.pipeline = DenseFlow(by_type.get(DenseFlowConfig))
         else:
-            from motiondetect.measurement.normal_flow import StageConfig
-
             self.pipeline = NormalFlowPipeline(by_type.get(StageConfig))
         self._epipole: np.ndarray | None = None
         self._recent: list[np.ndarray] = []
