@@ -42,6 +42,7 @@ from typing import Literal
 
 import numpy as np
 
+from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.hough import measurement_tolerance
 from motiondetect.constraint_ray.normal_filter import DIRECTION_BINS, direction_bin
 from motiondetect.detection.base import DetectorOutput
@@ -127,16 +128,12 @@ class AnimateConfig:
     min_cells: int = 3
 
     def __post_init__(self) -> None:
-        if self.first_appearance not in ("ignore", "flag"):
-            raise ValueError(
-                f"first_appearance must be 'ignore' or 'flag', but got {self.first_appearance!r}"
-            )
-        for name in ("max_speed_px", "still_px", "noise_grey", "noise_sigmas"):
-            if getattr(self, name) <= 0:
-                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
-        for name in ("counterflow_cells", "ahead_cells", "accel_px", "accel_relative"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"{name} must not be negative, but got {getattr(self, name)}")
+        check_fields(
+            self,
+            positive=("max_speed_px", "still_px", "noise_grey", "noise_sigmas"),
+            non_negative=("counterflow_cells", "ahead_cells", "accel_px", "accel_relative"),
+            choices={"first_appearance": ("ignore", "flag")},
+        )
 
 
 # ----------------------------------------------------------------------------

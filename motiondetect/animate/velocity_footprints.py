@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
 from motiondetect.constraint_ray.velocity_filter import hysteresis
 from motiondetect.detection.base import DetectorOutput
@@ -75,12 +76,11 @@ class VelocityAnimateConfig:
     fit: FitConfig = field(default_factory=FitConfig)
 
     def __post_init__(self) -> None:
-        for name in ("noise_sigmas", "floor_px"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
-        for name in ("accel_px", "accel_relative"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"{name} must not be negative, but got {getattr(self, name)}")
+        check_fields(
+            self,
+            positive=("noise_sigmas", "floor_px"),
+            non_negative=("accel_px", "accel_relative", "open_px", "spread_px", "memory_frames"),
+        )
 
 
 def predicted_residual(

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from motiondetect.config_checks import check_fields
 from motiondetect.measurement.dense_flow import VelocityField
 
 #: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
@@ -76,11 +77,13 @@ class FitConfig:
     parallax: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("sample_step_px", "ransac_px", "max_speed_px", "cut_grey", "parallax_sigmas"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
-        if not 0 <= self.min_inlier_share < 1:
-            raise ValueError(f"min_inlier_share must be in [0, 1), got {self.min_inlier_share}")
+        check_fields(
+            self,
+            positive=("sample_step_px", "ransac_px", "max_speed_px", "cut_grey", "parallax_sigmas"),
+            non_negative=("min_inlier_share", "min_parallax_blocks"),
+        )
+        if self.min_inlier_share >= 1:
+            raise ValueError(f"min_inlier_share must be below 1, got {self.min_inlier_share}")
 
 
 @dataclass(frozen=True)

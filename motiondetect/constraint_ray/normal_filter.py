@@ -28,6 +28,7 @@ from typing import Literal
 
 import numpy as np
 
+from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.hough import (
     CoarseField,
     coarse_field,
@@ -232,11 +233,11 @@ class ConstraintRayConfig:
     min_confidence: float = 0.2
 
     def __post_init__(self) -> None:
-        if self.ego_model not in ("fitted", "paper"):
-            raise ValueError(f"ego_model must be 'fitted' or 'paper', but got {self.ego_model!r}")
-        for name in ("noise_grey", "noise_sigmas", "tolerance_floor_px"):
-            if getattr(self, name) <= 0:
-                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
+        check_fields(
+            self,
+            positive=("noise_grey", "noise_sigmas", "tolerance_floor_px"),
+            choices={"ego_model": ("fitted", "paper")},
+        )
 
 
 class ConstraintRayDetector:

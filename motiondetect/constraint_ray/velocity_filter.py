@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DetectorOutput
@@ -67,13 +68,13 @@ class VelocityRayConfig:
     fit: FitConfig = field(default_factory=FitConfig)
 
     def __post_init__(self) -> None:
-        for name in ("noise_sigmas", "floor_px"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be positive, but got {getattr(self, name)}")
-        if not 0 < self.grow_ratio <= 1:
-            raise ValueError(f"grow_ratio must be in (0, 1], but got {self.grow_ratio}")
-        if self.close_px < 0:
-            raise ValueError(f"close_px must not be negative, but got {self.close_px}")
+        check_fields(
+            self,
+            positive=("noise_sigmas", "floor_px", "grow_ratio"),
+            non_negative=("close_px", "edge_px"),
+        )
+        if self.grow_ratio > 1:
+            raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
 
 
 def distance_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):

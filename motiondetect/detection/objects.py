@@ -16,6 +16,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from motiondetect.config_checks import check_fields
+
 
 @dataclass(frozen=True)
 class TrackConfig:
@@ -43,10 +45,11 @@ class TrackConfig:
     min_iou: float = 0.1
 
     def __post_init__(self) -> None:
-        if self.persistence < 1:
-            raise ValueError(f"persistence must be at least 1, but got {self.persistence}")
-        if self.gap_px < 0 or self.max_missed < 0:
-            raise ValueError("gap_px and max_missed must not be negative")
+        check_fields(
+            self,
+            positive=("persistence",),
+            non_negative=("gap_px", "min_area_share", "max_missed", "min_iou"),
+        )
 
 
 @dataclass(frozen=True)

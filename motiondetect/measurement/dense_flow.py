@@ -14,12 +14,12 @@ built from it line up with the frame being reported.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from typing import Any, Literal
 
 import cv2
 import numpy as np
 
+from motiondetect.config_checks import check_fields
 from motiondetect.measurement import stages
 from motiondetect.measurement.normal_flow import GridGeometry
 
@@ -47,10 +47,9 @@ class DenseFlowConfig:
     preset: Literal["ultrafast", "fast", "medium"] = "medium"
 
     def __post_init__(self) -> None:
+        check_fields(self, positive=("work_size",), choices={"preset": tuple(PRESETS)})
         if self.work_size < stages.MIN_FRAME_SIDE:
             raise ValueError(f"work_size must be at least 64, but got {self.work_size}")
-        if self.preset not in PRESETS:
-            raise ValueError(f"preset must be one of {sorted(PRESETS)}, but got {self.preset!r}")
 
 
 @dataclass(frozen=True)
@@ -67,6 +66,8 @@ class VelocityField:
     previous_grey : (h, w) ndarray of uint8
     geometry : GridGeometry
         Input and working sizes; the 64x64 grid maps onto both.
+    pixel_grid : (h, w, 2) ndarray of float32
+        (x, y) of every work pixel (made once per geometry, shared).
     camera : CameraFit, optional
         The observer motion fitted to this field, attached once per frame
         so that every detector shares it.
@@ -76,18 +77,18 @@ class VelocityField:
     grey: np.ndarray
     previous_grey: np.ndarray
     geometry: GridGeometry
+    pixel_grid: np.ndarray
     camera: Any = None
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.grey.shape
 
-    @cached_property
-    def pixel_grid(self) -> np.ndarray:
-        """(h, w, 2) float32 (x, y) of every work pixel."""
-        h, w = self.grey.shape
-        ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
-        return np.stack([xs, ys], axis=-1)
+
+def pixel_grid(width: int, height: int) -> np.ndarray:
+    """(height, width, 2) float32: the (x, y) of every pixel."""
+    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
+    return np.stack([xs, ys], axis=-1)
 
 
 def working_grey(frame: np.ndarray, size: tuple[int, int]) -> np.ndarray:
@@ -119,6 +120,7 @@ class DenseFlow:
         self._dis = cv2.DISOpticalFlow_create(PRESETS[self.config.preset])
         self._previous: np.ndarray | None = None
         self._geometry: GridGeometry | None = None
+        self._grid: np.ndarray | None = None
 
     def reset(self) -> None:
         """Forget the delayed frame."""
@@ -144,6 +146,7 @@ class DenseFlow:
         h, w = frame.shape[:2]
         if self._geometry is None or self._geometry.input_size != (w, h):
             self._geometry = self.geometry_for(w, h)
+            self._grid = pixel_grid(*self._geometry.work_size)
             self._previous = None
         grey = working_grey(frame, self._geometry.work_size)
         previous, self._previous = self._previous, grey
@@ -151,4 +154,4 @@ class DenseFlow:
             return None
         # Flow from the current frame back to the previous one, at current pixels.
         backward = self._dis.calc(grey, previous, None)
-        return VelocityField(-backward, grey, previous, self._geometry)
+        return VelocityField(-backward, grey, previous, self._geometry, self._grid)
