@@ -340,8 +340,6 @@ def test_synth_and_evaluate_commands(tmp_path):
             "-q",
             "--egomotion",
             tmp_path / "s" / "scene.json",
-            "--measure",
-            "normal",
         ).exit_code
         == 0
     )

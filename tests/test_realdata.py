@@ -70,8 +70,6 @@ def test_fox_with_known_egomotion(tmp_path):
         root / "transforms.json",
         "--work-size",
         "384",
-        "--measure",
-        "normal",
     )
     records = [json.loads(x) for x in (out / "frames.jsonl").read_text().splitlines()]
     known = [r for r in records if r["observer_motion"]["name"] == "known-egomotion"]

@@ -48,7 +48,11 @@ class VelocityRayConfig:
     noise_sigmas : float
         Tolerance in robust noise sigmas of the frame's residual.
     floor_px : float
-        Smallest tolerance, work px/frame.
+        Smallest tolerance under the fitted motion, work px/frame: it also
+        absorbs the rigid parallax the plane fit leaves.
+    known_floor_px : float
+        Smallest tolerance under known ego-motion, which leaves no parallax
+        unmodelled (the normal-flow filter's floor).
     grow_ratio : float
         Hysteresis: flagged regions grow over points off the ray by at
         least this share of the tolerance.
@@ -62,6 +66,7 @@ class VelocityRayConfig:
 
     noise_sigmas: float = 3.0
     floor_px: float = 1.0
+    known_floor_px: float = 0.3
     grow_ratio: float = 0.5
     close_px: int = 5
     edge_px: float = 4.0
@@ -70,7 +75,7 @@ class VelocityRayConfig:
     def __post_init__(self) -> None:
         check_fields(
             self,
-            positive=("noise_sigmas", "floor_px", "grow_ratio"),
+            positive=("noise_sigmas", "floor_px", "known_floor_px", "grow_ratio"),
             non_negative=("close_px", "edge_px"),
         )
         if self.grow_ratio > 1:
@@ -166,7 +171,8 @@ class VelocityRayDetector:
         known = self.egomotion(frame_index, field.geometry) if self.egomotion else None
         if not fit.reliable and known is None:
             return DetectorOutput.empty(field.shape, camera=fit)
-        tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
+        floor = cfg.floor_px if known is None else cfg.known_floor_px
+        tolerance = max(floor, cfg.noise_sigmas * fit.noise_px)
         if known is not None:
             distance = known_ray_distance(field, known)
         else:
@@ -177,7 +183,9 @@ class VelocityRayDetector:
             kernel = np.ones((cfg.close_px, cfg.close_px), np.uint8)
             mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, kernel) > 0
         strength = np.where(mask, distance / (distance + tolerance), 0.0).astype(np.float32)
-        return DetectorOutput.from_mask(mask, strength, camera=_with_known(fit, known))
+        return DetectorOutput.from_mask(
+            mask, strength, camera=_with_known(fit, known), observer=known
+        )
 
 
 def _with_known(fit: CameraFit, known: ObserverMotion | None) -> CameraFit:

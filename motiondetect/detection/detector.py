@@ -199,11 +199,12 @@ class MotionDetector:
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         judged = [out.camera for out in outputs.values() if out.camera is not None]
         camera = judged[0] if judged else fit
+        known = next((out.observer for out in outputs.values() if out.observer), None)
         empty = np.zeros((GRID, GRID), bool)
         if not camera.reliable:
             self.tracker.coast()
             return FrameResult(
-                index, time_s, [], empty, None, None, flow, outputs, camera=camera,
+                index, time_s, [], empty, known, None, flow, outputs, camera=camera,
                 reason=camera.reason,
             )  # fmt: skip
         union = np.zeros(flow.shape, bool)
@@ -216,7 +217,7 @@ class MotionDetector:
             mask |= obj.mask
         flagged = regions_mask(regions) if regions else empty
         return FrameResult(
-            index, time_s, regions, flagged, None, None, flow, outputs, mask=mask, camera=camera
+            index, time_s, regions, flagged, known, None, flow, outputs, mask=mask, camera=camera
         )
 
     def _persistent(
