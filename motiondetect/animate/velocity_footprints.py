@@ -83,67 +83,87 @@ class VelocityAnimateConfig:
         )
 
 
-def predicted_residual(
-    previous: np.ndarray, field: VelocityField, offset: tuple[float, float] = (0.0, 0.0)
+_FOOTPRINT = np.float32([(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)])
+_ROW = 1024  # points per row of a sampling block (remap takes at most 32767 columns)
+
+
+def sample_at(image: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Bilinear samples of ``image`` at ``points``; NaN outside the frame.
+
+    Parameters
+    ----------
+    image : (h, w, 2) ndarray of float32
+    points : (N, 2) ndarray of float32, (x, y) work px
+
+    Returns
+    -------
+    (N, 2) ndarray of float32
+    """
+    n = len(points)
+    rows = -(-n // _ROW)
+    block = np.full((rows * _ROW, 2), -1.0, np.float32)
+    block[:n] = points
+    block = block.reshape(rows, _ROW, 2)
+    out = cv2.remap(
+        image, block[..., 0], block[..., 1], cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT, borderValue=(np.nan, np.nan),
+    )  # fmt: skip
+    return out.reshape(-1, 2)[:n]
+
+
+def footprint_excess(
+    previous: np.ndarray,
+    source: np.ndarray,
+    residual: np.ndarray,
+    tolerance: float,
+    config: VelocityAnimateConfig,
 ) -> np.ndarray:
-    """The previous frame's residual velocity at where each current pixel came from.
+    """How far each point's velocity change exceeds what a smooth world allows.
 
     Parameters
     ----------
     previous : (h, w, 2) ndarray of float32
-    field : VelocityField
-    offset : (dx, dy)
-        Shift of the source point, work px (the footprint's spread).
+        The previous frame's residual velocity.
+    source : (N, 2) ndarray of float32
+        Where each point was in the previous frame, work px.
+    residual : (N, 2) ndarray of float32
+        Each point's residual velocity now.
 
     Returns
     -------
-    (h, w, 2) ndarray of float32; points that came from outside the frame
-    get NaN.
+    (N,) ndarray of float32, px/frame
+        The smallest excess over the footprint (the predicted point and its
+        four neighbours ``spread_px`` away): positive where the velocity
+        continues none of them; 0 for points that came from outside.
     """
-    source = field.pixel_grid - field.velocity_px + np.float32(offset)
-    return cv2.remap(
-        previous,
-        source[..., 0],
-        source[..., 1],
-        cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=(np.nan, np.nan),
-    )
+    best = None
+    for step in _FOOTPRINT:
+        predicted = sample_at(previous, source + config.spread_px * step)
+        change = np.hypot(*(residual - predicted).T)
+        allowance = tolerance + config.accel_px + config.accel_relative * np.hypot(*predicted.T)
+        excess = np.nan_to_num(change - allowance, nan=0.0)
+        best = excess if best is None else np.minimum(best, excess)
+    return best
 
 
 def violations(
-    residual: np.ndarray,
-    predictions: list[np.ndarray],
-    tolerance: float,
+    field: VelocityField, residual: np.ndarray, previous: np.ndarray, tolerance: float,
     config: VelocityAnimateConfig,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Where the velocity broke its smooth continuation.
+) -> np.ndarray:  # fmt: skip
+    """Where the velocity broke its smooth continuation, (h, w) bool.
 
-    Parameters
-    ----------
-    residual : (h, w, 2) ndarray of float32
-    predictions : list of (h, w, 2) ndarray
-        The previous residual at each point of the footprint; the velocity
-        is smooth when it continues *any* of them.
-
-    Returns
-    -------
-    mask : (h, w) ndarray of bool
-    excess : (h, w) ndarray of float32
-        Change beyond the allowance, px/frame (0 where none).
+    Only points moving off the plane (``|residual| > tolerance``) are
+    tested; see the module doc.
     """
-    excess = None
-    for predicted in predictions:
-        change = np.hypot(*(residual - predicted).transpose(2, 0, 1))
-        speed_before = np.hypot(predicted[..., 0], predicted[..., 1])
-        allowance = tolerance + config.accel_px + config.accel_relative * speed_before
-        this = np.nan_to_num(change - allowance, nan=0.0)
-        excess = this if excess is None else np.minimum(excess, this)
     moving = np.hypot(residual[..., 0], residual[..., 1]) > tolerance
-    mask = moving & (excess > 0)
+    ys, xs = np.nonzero(moving)
+    mask = np.zeros(moving.shape, np.uint8)
+    if len(ys):
+        source = field.pixel_grid[ys, xs] - field.velocity_px[ys, xs]
+        excess = footprint_excess(previous, source, residual[ys, xs], tolerance, config)
+        mask[ys, xs] = excess > 0
     kernel = np.ones((config.open_px, config.open_px), np.uint8) if config.open_px > 1 else _SQUARE3
-    mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, kernel) > 0
-    return mask, np.maximum(excess, 0.0).astype(np.float32)
+    return cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel) > 0
 
 
 class VelocityAnimateDetector:
@@ -185,10 +205,7 @@ class VelocityAnimateDetector:
         if not fit.reliable or previous is None or previous.shape != field.velocity_px.shape:
             return DetectorOutput.empty(field.shape, camera=fit)
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
-        spread = cfg.spread_px
-        offsets = [(0.0, 0.0), (spread, 0.0), (-spread, 0.0), (0.0, spread), (0.0, -spread)]
-        predictions = [predicted_residual(previous, field, o) for o in offsets]
-        violation, excess = violations(fit.residual_px, predictions, tolerance, cfg)
+        violation = violations(field, fit.residual_px, previous, tolerance, cfg)
         animate = self._remember(violation, field)
         speed = np.hypot(fit.residual_px[..., 0], fit.residual_px[..., 1])
         mask = hysteresis(speed, tolerance, 1.0, seeds=animate)
