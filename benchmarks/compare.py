@@ -28,6 +28,7 @@ import numpy as np
 
 from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.files import last_number
 from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import Counts, find_gt_folder, score_frame
 
@@ -167,14 +168,9 @@ def gt_masks(gt: Path | None) -> dict[int, Path]:
     if gt is None:
         return {}
     folder = find_gt_folder(gt)
-    import re
-
-    files = sorted(
-        (p for p in folder.iterdir() if p.suffix.lower() == ".png"),
-        key=lambda p: int(re.findall(r"\d+", p.stem)[-1]),
-    )
-    first = int(re.findall(r"\d+", files[0].stem)[-1])
-    return {int(re.findall(r"\d+", p.stem)[-1]) - first: p for p in files}
+    files = sorted((p for p in folder.iterdir() if p.suffix.lower() == ".png"), key=last_number)
+    first = last_number(files[0])
+    return {last_number(p) - first: p for p in files}
 
 
 def run_sequence(source: Path, gt: Path | None, methods) -> dict[str, tuple[Counts, float]]:

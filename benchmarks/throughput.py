@@ -28,7 +28,8 @@ sys.path.insert(0, str(HERE))
 
 from common import decode_only, make_pan_clip, mog2_on  # noqa: E402
 
-from motiondetect.app.runner import InputJob, process_input  # noqa: E402
+from motiondetect.app.inputs import InputJob  # noqa: E402
+from motiondetect.app.process import process_input  # noqa: E402
 from motiondetect.app.settings import make_settings  # noqa: E402
 from motiondetect.io.video import open_source  # noqa: E402
 from motiondetect.measurement.normal_flow import NormalFlowPipeline  # noqa: E402
@@ -96,7 +97,8 @@ def memory(tmp: Path, long_s: float, short_s: float) -> None:
     """Peak RSS of detect on a long and a short 1080p video, in fresh processes."""
     code = (
         "import resource,sys;from pathlib import Path;"
-        "from motiondetect.app.runner import InputJob, process_input;"
+        "from motiondetect.app.inputs import InputJob;"
+        "from motiondetect.app.process import process_input;"
         "from motiondetect.app.settings import make_settings;"
         "p=Path(sys.argv[1]);s=make_settings({'output':sys.argv[2],'overwrite':True});"
         "r=process_input(InputJob(p,p.stem),s);assert r.status=='done',r.message;"

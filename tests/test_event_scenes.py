@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.app.events import EventRules, EventTimeline
 from motiondetect.detection.detector import MotionDetector
+from motiondetect.detection.events import EventRules, EventTimeline
 from motiondetect.tools.synth import SynthConfig, render_frames
 
 pytestmark = pytest.mark.slow

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motiondetect.app.events import EventRules, EventTimeline, find_runs, timecode
+from motiondetect.detection.events import EventRules, EventTimeline, find_runs, timecode
 
 
 def test_runs_merge_gaps_drop_short_and_pad():

@@ -16,8 +16,9 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.app import runner
-from motiondetect.app.runner import InputJob, process_input
+from motiondetect.app import process, runner
+from motiondetect.app.inputs import InputJob
+from motiondetect.app.process import process_input
 from motiondetect.app.settings import make_settings
 
 from .scenes import scene
@@ -107,19 +108,19 @@ def test_8k_frames_are_processed_at_the_working_resolution(tmp_path):
 
 def test_full_disk_errors_and_leaves_no_complete_looking_output(tmp_path, frames, monkeypatch):
     clip = write_video(tmp_path / "v.mp4", frames[:8])
-    real = runner.write_json
+    real = process.write_json
 
     def full(fp, doc):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(runner, "write_json", full)
+    monkeypatch.setattr(process, "write_json", full)
     settings = make_settings({"output": tmp_path / "o", "video": False})
     result = process_input(InputJob(clip, "v"), settings)
     assert result.status == "failed"
     assert "No space left on device" in result.message
     assert not (tmp_path / "o" / "v" / "summary.json").exists()
     assert not [p for p in (tmp_path / "o" / "v").iterdir() if p.name.startswith(".")]
-    monkeypatch.setattr(runner, "write_json", real)
+    monkeypatch.setattr(process, "write_json", real)
     assert process_input(InputJob(clip, "v"), settings).status == "done"
 
 

@@ -43,12 +43,16 @@ from typing import Literal
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.hough import measurement_tolerance
-from motiondetect.constraint_ray.normal_filter import DIRECTION_BINS, direction_bin
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import drop_isolated, find_regions
 from motiondetect.measurement.luts import BinTable
-from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField
+from motiondetect.measurement.normal_flow import (
+    DIRECTION_BINS,
+    GridGeometry,
+    NormalFlowField,
+    direction_bin,
+    measurement_tolerance,
+)
 
 NAME = "animate"
 

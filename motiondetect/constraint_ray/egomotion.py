@@ -22,7 +22,6 @@ frames matched by the number in their file names.
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,6 +29,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.observer_motion import UNBOUNDED, ObserverMotion
+from motiondetect.io.files import last_number
 from motiondetect.measurement.normal_flow import GridGeometry
 
 FORMAT = "motiondetect-egomotion"
@@ -52,11 +52,6 @@ class Intrinsics:
     @property
     def matrix(self) -> np.ndarray:
         return np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1.0]])
-
-
-def _number_in(name: str) -> int | None:
-    found = re.findall(r"\d+", Path(name).stem)
-    return int(found[-1]) if found else None
 
 
 class EgoMotion:
@@ -123,7 +118,7 @@ class EgoMotion:
         intr = Intrinsics(w, h, fx, fy, float(doc.get("cx", w / 2)), float(doc.get("cy", h / 2)))
         by_number = {}
         for entry in doc["frames"]:
-            number = _number_in(entry["file_path"])
+            number = last_number(entry["file_path"])
             if number is not None:
                 by_number[number] = np.asarray(entry["transform_matrix"], float).reshape(4, 4)
         numbers = frame_numbers if frame_numbers is not None else sorted(by_number)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motiondetect.measurement.normal_flow import NormalFlowField
+from motiondetect.measurement.normal_flow import NormalFlowField, measurement_tolerance
 from motiondetect.measurement.stages import GRID
 
 REGIONS = 4
@@ -79,17 +79,6 @@ def _by_region(a: np.ndarray) -> np.ndarray:
         .swapaxes(-3, -2)
         .reshape(*lead, REGIONS * REGIONS, s * s)
     )
-
-
-def measurement_tolerance(field: NormalFlowField, noise_grey: float, floor_px: float) -> np.ndarray:
-    """Per-cell noise tolerance of ``flow_px``: noise / |grad I|, with a floor.
-
-    The normal-flow error grows like 1/|grad I| (docs/detectors.md), so a
-    fixed tolerance would be too strict on weak edges and too loose on
-    strong ones.
-    """
-    grad = np.maximum(field.gradient, 1e-3)
-    return np.maximum(np.float32(floor_px), np.float32(noise_grey) / grad)
 
 
 def coarse_field(

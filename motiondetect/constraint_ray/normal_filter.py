@@ -29,11 +29,7 @@ from typing import Literal
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.hough import (
-    CoarseField,
-    coarse_field,
-    measurement_tolerance,
-)
+from motiondetect.constraint_ray.hough import CoarseField, coarse_field
 from motiondetect.constraint_ray.observer_motion import (
     ObserverMotion,
     classify,
@@ -42,11 +38,15 @@ from motiondetect.constraint_ray.observer_motion import (
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import drop_isolated, find_regions
 from motiondetect.measurement.luts import BinTable
-from motiondetect.measurement.normal_flow import NormalFlowField
+from motiondetect.measurement.normal_flow import (
+    DIRECTION_BINS,
+    NormalFlowField,
+    direction_bin,
+    measurement_tolerance,
+)
 
 NAME = "constraint-ray"
 
-DIRECTION_BINS = 16  # over [0, pi): (n, m) and (-n, -m) are the same measurement
 _POSITIVE_EDGES = np.array(
     [0.0, 0.125, 0.25, 0.375, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.5, 8.5]
 )
@@ -132,11 +132,6 @@ def decode_mask(mask: int) -> tuple[float, float]:
     """The interval [lo, hi] of bin edges spanned by a contiguous mask."""
     bits = [i for i in range(MAGNITUDE_BINS) if mask >> i & 1]
     return float(MAGNITUDE_EDGES[bits[0]]), float(MAGNITUDE_EDGES[bits[-1] + 1])
-
-
-def direction_bin(theta: np.ndarray) -> np.ndarray:
-    """Bin 0..15 of an orientation in [0, pi)."""
-    return np.minimum((theta * (DIRECTION_BINS / np.pi)).astype(np.intp), DIRECTION_BINS - 1)
 
 
 def filter_bits(model: ObserverMotion, bins: np.ndarray) -> np.ndarray:

@@ -11,18 +11,9 @@ import numpy as np
 
 from motiondetect.constraint_ray.hough import REGIONS, STILL, UNKNOWN
 from motiondetect.detection.detector import FrameResult
-from motiondetect.io.timeline import CLASS_COLOURS
+from motiondetect.io.colours import CLASS_COLOURS, DETECTOR_COLOURS, LEGEND
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
-_DETECTOR_COLOURS = {  # BGR
-    ("constraint-ray",): (0, 140, 255),
-    ("animate",): (255, 80, 200),
-    ("constraint-ray", "animate"): (0, 0, 255),
-    ("velocity-ray",): (0, 140, 255),
-    ("velocity-animate",): (255, 80, 200),
-    ("velocity-ray", "velocity-animate"): (0, 0, 255),
-}
-_LEGEND = (("ray", (0, 140, 255)), ("animate", (255, 80, 200)), ("both", (0, 0, 255)))
 
 
 def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
@@ -45,7 +36,7 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
     for region in result.regions:
         x, y, w, h = region.bbox
-        colour = _DETECTOR_COLOURS.get(tuple(region.detectors), (0, 255, 255))
+        colour = DETECTOR_COLOURS.get(tuple(region.detectors), (0, 255, 255))
         p0 = (int(x * sx), int(y * sy))
         p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
         cv2.rectangle(out, p0, p1, colour, 2)
@@ -72,7 +63,7 @@ def _draw_legend(out: np.ndarray) -> None:
     scale = max(0.4, out.shape[1] / 800)
     step = int(18 * scale / 0.4 * 0.6) + 6
     y = out.shape[0] - 6
-    for name, colour in reversed(_LEGEND):
+    for name, colour in reversed(LEGEND):
         cv2.rectangle(out, (6, y - step + 8), (16, y - 2), colour, -1)
         _text(out, name, (20, y), colour)
         y -= step

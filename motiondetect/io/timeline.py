@@ -9,19 +9,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motiondetect.app.events import EventTimeline
 from motiondetect.constraint_ray.observer_motion import CLASS_NAMES
-
-CLASS_COLOURS = {  # BGR
-    -1: (160, 160, 160),
-    0: (90, 90, 90),
-    1: (200, 120, 40),
-    2: (60, 170, 60),
-    3: (40, 200, 200),
-    4: (200, 80, 200),
-    5: (40, 110, 230),
-    6: (230, 200, 60),
-}
+from motiondetect.detection.events import EventTimeline
+from motiondetect.io.colours import CLASS_COLOURS
 
 
 def draw_timeline(

@@ -16,13 +16,14 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import re
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from motiondetect.io.files import atomic_path, last_number, temporary_path
 
 log = logging.getLogger("motiondetect")
 
@@ -88,8 +89,9 @@ class SourceFrame:
 
 
 def numeric_key(path: Path) -> tuple:
-    numbers = re.findall(r"\d+", path.stem)
-    return (int(numbers[-1]) if numbers else -1, path.name)
+    """Sort key of a frame file: its last number, then its name."""
+    number = last_number(path)
+    return (-1 if number is None else number, path.name)
 
 
 def is_frames_folder(path: Path) -> bool:
@@ -291,7 +293,7 @@ class VideoSink:
 
     def __init__(self, path: str | Path, fps: float, size: tuple[int, int]) -> None:
         self.path = Path(path)
-        self._tmp = self.path.with_name(f".{self.path.stem}.part{os.getpid()}{self.path.suffix}")
+        self._tmp = temporary_path(self.path)
         fourcc = cv2.VideoWriter_fourcc(*self.FOURCC.get(self.path.suffix.lower(), "mp4v"))
         with _quiet_native_stderr():
             self._writer = cv2.VideoWriter(str(self._tmp), fourcc, float(fps), size)
@@ -338,9 +340,8 @@ def write_png(path: Path, image: np.ndarray) -> None:
     ok, buf = cv2.imencode(".png", image)
     if not ok:
         raise OSError(f"cannot encode {path}")
-    tmp = path.with_name(f".{path.name}.part")
-    buf.tofile(str(tmp))
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        buf.tofile(str(tmp))
 
 
 def count_decodable_frames(path: str | Path) -> int:

@@ -156,6 +156,24 @@ class NormalFlowField:
         return fold_orientation(self.direction_rad)
 
 
+DIRECTION_BINS = 16  # over [0, pi): (n, m) and (-n, -m) are the same measurement
+
+
+def direction_bin(theta: np.ndarray) -> np.ndarray:
+    """Bin 0..15 of an orientation in [0, pi)."""
+    return np.minimum((theta * (DIRECTION_BINS / np.pi)).astype(np.intp), DIRECTION_BINS - 1)
+
+
+def measurement_tolerance(field: NormalFlowField, noise_grey: float, floor_px: float) -> np.ndarray:
+    """Per-cell noise tolerance of ``flow_px``: noise / |grad I|, with a floor.
+
+    The normal-flow error grows like 1/|grad I| (docs/maths.md), so a fixed
+    tolerance would be too strict on weak edges and too loose on strong ones.
+    """
+    grad = np.maximum(field.gradient, 1e-3)
+    return np.maximum(np.float32(floor_px), np.float32(noise_grey) / grad)
+
+
 def fold_orientation(direction_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Fold gradient directions into orientations in [0, pi).
 

@@ -20,13 +20,13 @@ Predictions are ``masks/NNNNNN.png`` (0-based frame index) as
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from motiondetect.io.files import last_number
 from motiondetect.io.video import read_mask
 
 GT_FOLDERS = ("groundtruth", "Annotations", "truth", "masks")
@@ -88,11 +88,6 @@ class Counts:
 class SequenceScore:
     name: str
     counts: Counts = field(default_factory=Counts)
-
-
-def _number(path: Path) -> int | None:
-    found = re.findall(r"\d+", path.stem)
-    return int(found[-1]) if found else None
 
 
 def find_gt_folder(path: Path) -> Path:
@@ -186,18 +181,18 @@ def evaluate_sequence(
         (
             p
             for p in gt_dir.iterdir()
-            if p.suffix.lower() in (".png", ".bmp") and _number(p) is not None
+            if p.suffix.lower() in (".png", ".bmp") and last_number(p) is not None
         ),
-        key=_number,
+        key=last_number,
     )
     if not gt_files:
         raise EvaluateError(f"{gt}: no ground-truth masks found")
-    first = _number(gt_files[0])
+    first = last_number(gt_files[0])
     roi = _temporal_roi(gt_dir)
-    preds = {_number(p): p for p in pred_dir.glob("*.png") if _number(p) is not None}
+    preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
     score = SequenceScore(name or pred.name)
     for gt_file in gt_files:
-        number = _number(gt_file)
+        number = last_number(gt_file)
         index = number - first
         if index < warmup or (roi and not roi[0] <= number <= roi[1]):
             continue

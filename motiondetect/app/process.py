@@ -1,0 +1,247 @@
+"""One input, start to finish: detect frame by frame, write every output.
+
+An input is *finished* when its ``summary.json`` exists: it is written last,
+by atomic rename. :func:`process_input` is the failure boundary of one
+input: whatever goes wrong becomes that input's one-line failure.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import shutil
+import time
+from pathlib import Path
+
+from motiondetect.app.inputs import InputError, InputJob, InputResult, Progress
+from motiondetect.app.roi import keep_detections, roi_mask
+from motiondetect.app.settings import Settings
+from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
+from motiondetect.detection.detector import FrameResult, MotionDetector
+from motiondetect.detection.events import EventRules, EventTimeline
+from motiondetect.io.annotate import annotate, annotated_size
+from motiondetect.io.files import TEMPORARY_PREFIX
+from motiondetect.io.records import frame_record, summary_record
+from motiondetect.io.report import (
+    DetectionsCsvWriter,
+    FramesJsonlWriter,
+    atomic_text,
+    write_events_csv,
+    write_json,
+)
+from motiondetect.io.timeline import draw_timeline
+from motiondetect.io.video import (
+    FrameSource,
+    SourceFrame,
+    VideoError,
+    VideoSink,
+    open_source,
+    to_display,
+    write_png,
+)
+
+log = logging.getLogger("motiondetect")
+
+
+def make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
+    """The detector a run's settings describe, with its known ego-motion if any."""
+    ego = None
+    if settings.egomotion is not None:
+        numbers = getattr(source, "frame_numbers", None)
+        try:
+            ego = EgoMotion.load(settings.egomotion, numbers)
+        except EgoMotionError as exc:
+            raise InputError(str(exc)) from exc
+    return MotionDetector(
+        settings.detector,
+        *settings.detector_configs(),
+        measure=settings.measure,
+        egomotion=ego,
+        persistence=settings.persistence,
+    )
+
+
+def _check_paths(job: InputJob, out_dir: Path) -> None:
+    """No output may ever point at (or inside) an input."""
+    src = job.path.resolve()
+    dst = out_dir.resolve()
+    if dst == src or src in dst.parents or (src.is_dir() and dst.is_relative_to(src)):
+        raise InputError(f"{job.path}: the output folder {out_dir} would be inside the input")
+
+
+def process_input(
+    job: InputJob, settings: Settings, progress: Progress | None = None
+) -> InputResult:
+    """Detect motion in one input and write its outputs. Never raises for bad input."""
+    out_dir = settings.output / job.name
+    if (out_dir / "summary.json").exists() and not settings.overwrite:
+        return InputResult(job, "skipped", "already finished (use --overwrite to redo)")
+    try:
+        _check_paths(job, out_dir)
+        with open_source(job.path, settings.frames_fps) as source:
+            summary = _process(job, source, out_dir, settings, progress)
+        return InputResult(job, "done", summary=summary)
+    except (VideoError, InputError) as exc:
+        return InputResult(job, "failed", str(exc))
+    except OSError as exc:
+        where = exc.filename or out_dir
+        return InputResult(
+            job, "failed", f"{job.path}: cannot write {where}: {exc.strerror or exc}"
+        )
+    except MemoryError:
+        return InputResult(job, "failed", f"{job.path}: out of memory")
+    except Exception as exc:  # the failure boundary: any bug stays this input's failure
+        log.debug("%s: internal error", job.path, exc_info=True)
+        return InputResult(job, "failed", f"{job.path}: internal error: {exc!r}")
+
+
+class _FrameWriters:
+    """frames.jsonl, detections.csv, masks and the annotated video of one input."""
+
+    def __init__(self, out_dir: Path, settings: Settings, source: FrameSource) -> None:
+        info = source.info
+        self.settings, self.info = settings, info
+        self.masks_dir = out_dir / "masks" if settings.masks else None
+        if self.masks_dir is not None:
+            shutil.rmtree(self.masks_dir, ignore_errors=True)
+            self.masks_dir.mkdir()
+        self.size = annotated_size(info.width, info.height, settings.work_size)
+        video = out_dir / f"annotated.{settings.video_format}"
+        self.sink = VideoSink(video, info.fps, self.size) if settings.video else None
+        with contextlib.ExitStack() as files:  # every file closes, whatever fails first
+            jsonl = files.enter_context(open(out_dir / "frames.jsonl", "w", encoding="utf-8"))
+            csv = files.enter_context(
+                open(out_dir / "detections.csv", "w", encoding="utf-8", newline="")
+            )
+            self.frames = FramesJsonlWriter(jsonl)
+            self.detections = DetectionsCsvWriter(csv)
+            self._files = files.pop_all()
+
+    def write(self, frame: SourceFrame, result: FrameResult) -> dict:
+        record = frame_record(result)
+        self.frames.append(record)
+        for det in record["detections"]:
+            self.detections.append(result.index, result.time_s, det)
+        self.detections.flush()
+        if self.masks_dir is not None:
+            mask = result.input_mask(self.info.width, self.info.height)
+            write_png(self.masks_dir / f"{result.index:06d}.png", mask)
+        if self.sink is not None:
+            self.sink.write(annotate(to_display(frame.image), result, self.size))
+        return record
+
+    def close(self, ok: bool) -> None:
+        with self._files:
+            if self.sink is not None:
+                self.sink.close(keep=ok)
+
+
+def _detect_frames(
+    source: FrameSource, writers: _FrameWriters, settings: Settings, progress: Progress | None
+) -> tuple[EventTimeline, int]:
+    """The per-frame loop; returns the timeline and the number of detections."""
+    detector = make_detector(settings, source)
+    info = source.info
+    roi = roi_mask(settings, info.width, info.height)
+    timeline, detections = EventTimeline(), 0
+    for frame in source:
+        result = detector.process(frame.image, frame.index, frame.time_s)
+        result = keep_detections(result, roi, settings.min_area)
+        record = writers.write(frame, result)
+        detections += len(record["detections"])
+        timeline.add(
+            result.time_s, result.score, result.moving_fraction,
+            record["observer_motion"]["class"], record["detections"],
+        )  # fmt: skip
+        if progress is not None:
+            progress(len(timeline), info.frame_count)
+    return timeline, detections
+
+
+def _prepare(out_dir: Path) -> None:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "summary.json").unlink(missing_ok=True)
+    for stale in out_dir.glob(f"{TEMPORARY_PREFIX}*"):  # temporaries of an interrupted run
+        stale.unlink(missing_ok=True)
+
+
+def _process(
+    job: InputJob, source: FrameSource, out_dir: Path, settings: Settings, progress: Progress | None
+) -> dict:
+    _prepare(out_dir)
+    writers = _FrameWriters(out_dir, settings, source)
+    started = time.perf_counter()
+    try:
+        timeline, detections = _detect_frames(source, writers, settings, progress)
+    except BaseException:
+        writers.close(ok=False)
+        raise
+    writers.close(ok=len(timeline) > 0)
+    elapsed = time.perf_counter() - started
+    if len(timeline) == 0:
+        raise InputError(f"{job.path}: no frames could be decoded")
+    rules = EventRules(settings.min_event_frames, settings.merge_gap_frames, settings.pad_frames)
+    events = timeline.events(rules, source.info.fps)
+    with atomic_text(out_dir / "events.csv") as fp:
+        write_events_csv(fp, events)
+    if settings.timeline:
+        write_png(out_dir / "timeline.png", draw_timeline(timeline, events))
+    if settings.extract_clips and events:
+        extract_clips(job.path, out_dir / "events", events, settings)
+    if source.partial:
+        log.warning(
+            "%s: input is truncated or damaged; processed %d frames", job.path, len(timeline)
+        )
+    totals = {
+        "frames": len(timeline),
+        "frames_with_detections": int(sum(b is not None for b in timeline.boxes)),
+        "detections": detections,
+        "events": len(events),
+    }
+    outputs = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+    status = "partial" if source.partial else "complete"
+    summary = summary_record(
+        str(job.path), source.info, status, settings.to_json(), totals, elapsed, events, outputs
+    )
+    with atomic_text(out_dir / "summary.json") as fp:
+        write_json(fp, summary)
+    return summary
+
+
+def _annotated_result(detector: MotionDetector | None, frame: SourceFrame):
+    return detector.process(frame.image, frame.index, frame.time_s) if detector else None
+
+
+def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Settings) -> list[Path]:
+    """Cut one clip per event (padding included) from the input frames.
+
+    A second streaming pass over the input; with ``clips_annotated`` the
+    frames are annotated (the detector is re-run, which costs one more pass
+    of detection but keeps memory flat).
+    """
+    clip_dir.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    pending = list(events)
+    sink: VideoSink | None = None
+    with open_source(path, settings.frames_fps) as source:
+        info = source.info
+        size = (info.width - info.width % 2, info.height - info.height % 2)
+        detector = make_detector(settings, source) if settings.clips_annotated else None
+        for frame in source:
+            result = _annotated_result(detector, frame)
+            if not pending:
+                break
+            ev = pending[0]
+            if frame.index == ev["start_frame"]:
+                sink = VideoSink(clip_dir / f"event_{ev['event']:04d}.mp4", info.fps, size)
+            if sink is not None:
+                image = to_display(frame.image)[: size[1], : size[0]]
+                sink.write(image if result is None else annotate(image, result, size))
+            if frame.index == ev["end_frame"] and sink is not None:
+                sink.close()
+                written.append(sink.path)
+                sink, _ = None, pending.pop(0)
+    if sink is not None:
+        sink.close()
+        written.append(sink.path)
+    return written
