@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from motiondetect.animate import jitter as jt
 from motiondetect.animate import normal_footprints as an
+from motiondetect.animate import values as va
 from motiondetect.animate.normal_footprints import AnimateConfig
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField, fold_direction
 
@@ -39,19 +41,19 @@ def test_footprint_bar_spans_the_constraint_line():
 
 def words_of(m, direction) -> np.ndarray:
     """Value words of a raw measurement (normal flow m along ``direction``)."""
-    return an.value_words(*fold_direction(np.asarray(direction), np.asarray(m, float)))
+    return va.value_words(*fold_direction(np.asarray(direction), np.asarray(m, float)))
 
 
 def test_value_bit_encoding_round_trip():
-    width = np.pi / an.ORIENTATIONS
-    centres = np.concatenate([[-12.0], (an.FLOW_EDGES_SIGNED[:-1] + an.FLOW_EDGES_SIGNED[1:]) / 2])
+    width = np.pi / va.ORIENTATIONS
+    centres = np.concatenate([[-12.0], (va.FLOW_EDGES_SIGNED[:-1] + va.FLOW_EDGES_SIGNED[1:]) / 2])
     centres = np.append(centres, 12.0)
-    assert len(centres) == an.FLOW_BINS
+    assert len(centres) == va.FLOW_BINS
     seen = set()
-    for o in range(an.ORIENTATIONS):
-        for k in range(an.FLOW_BINS):
-            word, bit = an.encode_value(o, k)
-            assert an.decode_value(word, bit) == (o, k)
+    for o in range(va.ORIENTATIONS):
+        for k in range(va.FLOW_BINS):
+            word, bit = va.encode_value(o, k)
+            assert va.decode_value(word, bit) == (o, k)
             seen.add((word, bit))
             theta = (o + 0.25) * width  # nearer the lower neighbour
             words = words_of(centres[k], theta)
@@ -61,14 +63,14 @@ def test_value_bit_encoding_round_trip():
             np.testing.assert_array_equal(words, same)
             # and one more bit, for the nearer neighbouring orientation
             assert sum(bin(int(w)).count("1") for w in words) == 2
-    assert len(seen) == an.ORIENTATIONS * an.FLOW_BINS
+    assert len(seen) == va.ORIENTATIONS * va.FLOW_BINS
 
 
 def test_neighbouring_orientation_across_zero_flips_the_sign():
     # 1 degree and 179 degrees are 2 degrees apart; m = 3 along 1 degree is
     # m = -3 along 179 degrees.
     words = words_of(3.0, np.deg2rad(1.0))
-    word, bit = an.encode_value(an.ORIENTATIONS - 1, int(an.flow_bin(np.array(-3.0))))
+    word, bit = va.encode_value(va.ORIENTATIONS - 1, int(va.flow_bin(np.array(-3.0))))
     assert words[word] >> np.uint64(bit) & np.uint64(1) == 1
 
 
@@ -77,8 +79,8 @@ def test_candidates_accept_smooth_change_and_reject_reversal():
     words = words_of(2.0, theta)[:, None, None]
     tol = np.array(0.3)
     for m, expected in ((2.0, True), (2.6, True), (-2.0, False), (5.0, False)):
-        o, cand = an.candidate_slots(*fold_direction(theta, np.array(m)), tol, 0.5, 0.1)
-        allowed = an.map_slot(words, np.asarray(o)[None, None])[0, 0]
+        o, cand = va.candidate_slots(*fold_direction(theta, np.array(m)), tol, 0.5, 0.1)
+        allowed = va.map_slot(words, np.asarray(o)[None, None])[0, 0]
         assert bool(allowed & cand) == expected, m
 
 
@@ -162,15 +164,15 @@ def test_jitter_shift_is_the_blocks_common_change_and_ignores_a_mover():
             SQUARE,
         )
 
-    before = an.block_flows(field(smooth))
+    before = jt.block_flows(field(smooth))
     np.testing.assert_allclose(before[0, 0], smooth[:, 8, 8].T, atol=0.3)
     moved = smooth + jitter[:, None, None]
     moved[:, :20, :20] += np.array([9.0, 4.0])[:, None, None]  # a mover in a few blocks
-    after = an.block_flows(field(moved))
-    np.testing.assert_allclose(an.jitter_shift(before, after), jitter, atol=0.05)
+    after = jt.block_flows(field(moved))
+    np.testing.assert_allclose(jt.jitter_shift(before, after), jitter, atol=0.05)
     # too few blocks with both components fixed: no estimate
     blank = np.full_like(before, np.nan)
-    np.testing.assert_array_equal(an.jitter_shift(blank, after), [0.0, 0.0])
+    np.testing.assert_array_equal(jt.jitter_shift(blank, after), [0.0, 0.0])
 
 
 # --- Synthetic scenes ---------------------------------------------------------

@@ -42,29 +42,20 @@ from typing import Literal
 
 import numpy as np
 
+from motiondetect.animate.jitter import block_flows, jitter_shift
+from motiondetect.animate.values import WORDS, candidate_slots, map_slot, value_words
 from motiondetect.config_checks import check_fields
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import drop_isolated, find_regions
 from motiondetect.measurement.luts import BinTable
 from motiondetect.measurement.normal_flow import (
-    DIRECTION_BINS,
     GridGeometry,
     NormalFlowField,
-    direction_bin,
     measurement_tolerance,
 )
 
 NAME = "animate"
 
-# Values: the gradient orientation (mod pi) in 8 bins x the signed normal flow
-# along it in 15 bins; 16 bits per orientation, so two 64-bit words per cell.
-ORIENTATIONS = 8
-FLOW_EDGES_PX = np.array([0.4, 1.2, 2.2, 3.5, 5.0, 7.0, 9.5])
-FLOW_EDGES_SIGNED = np.concatenate([-FLOW_EDGES_PX[::-1], FLOW_EDGES_PX])
-FLOW_BINS = len(FLOW_EDGES_SIGNED) + 1  # 15; the middle one is "still"
-SLOT_BITS = 16
-WORDS = ORIENTATIONS * SLOT_BITS // 64  # 2
-SLOTS_PER_WORD = 64 // SLOT_BITS  # 4
 # Footprint geometry only: 16 directions of the vector m n x 6 magnitudes + still.
 FOOTPRINT_DIRECTIONS = 16
 FOOTPRINT_MAGNITUDE_EDGES_PX = np.array([0.6, 1.2, 2.4, 4.8, 9.6])
@@ -138,97 +129,6 @@ class AnimateConfig:
             non_negative=("counterflow_cells", "ahead_cells", "accel_px", "accel_relative"),
             choices={"first_appearance": ("ignore", "flag")},
         )
-
-
-# ----------------------------------------------------------------------------
-# Value encoding
-# ----------------------------------------------------------------------------
-
-
-def orientation_bin(theta: np.ndarray) -> np.ndarray:
-    """Bin 0..7 of an orientation in [0, pi): pairs of the filter's 16 bins."""
-    return direction_bin(theta) // (DIRECTION_BINS // ORIENTATIONS)
-
-
-#: Bin 0..14 of a signed normal flow; bin 7 is ``|m| < 0.4``.
-flow_bin = BinTable(FLOW_EDGES_SIGNED, step=0.1, limit=10.0)
-
-
-def encode_value(orientation: int, flow: int) -> tuple[int, int]:
-    """(word, bit) of the value ``(orientation bin, flow bin)``."""
-    slot = orientation % SLOTS_PER_WORD
-    return orientation // SLOTS_PER_WORD, slot * SLOT_BITS + flow
-
-
-def decode_value(word: int, bit: int) -> tuple[int, int]:
-    """Inverse of :func:`encode_value`: (orientation bin, flow bin)."""
-    return word * SLOTS_PER_WORD + bit // SLOT_BITS, bit % SLOT_BITS
-
-
-_ONE = np.uint64(1)
-_SLOT_MASK = np.uint64((1 << SLOT_BITS) - 1)
-#: (2, 128): the two words with only bit i set, for i in 0..127.
-_ONE_HOT = np.array(
-    [[(1 << i) & (2**64 - 1), (1 << i) >> 64] for i in range(WORDS * 64)], np.uint64
-).T.copy()
-
-
-def value_words(theta: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Bit-encoded value of each measurement, written into its orientation
-    bin and the nearer neighbouring bin (with the sign of ``m`` flipped when
-    that neighbour is across 0/pi), so that orientations closer than half a
-    bin always share one.
-
-    Parameters
-    ----------
-    theta, m : ndarray
-        Folded measurements: orientation in [0, pi) and the normal flow
-        signed along it (:func:`motiondetect.measurement.normal_flow.fold_direction`).
-
-    Returns
-    -------
-    (2, …) ndarray of uint64
-    """
-    width = np.pi / ORIENTATIONS
-    own = orientation_bin(theta)
-    step = np.where(theta - own * width >= width / 2, 1, -1)
-    other = own + step
-    across = (other < 0) | (other >= ORIENTATIONS)
-    first = own * SLOT_BITS + flow_bin(m)  # bit 0..127 over the two words
-    second = (other % ORIENTATIONS) * SLOT_BITS + flow_bin(np.where(across, -m, m))
-    return np.take(_ONE_HOT, first, axis=1) | np.take(_ONE_HOT, second, axis=1)
-
-
-def candidate_slots(
-    theta: np.ndarray,
-    m: np.ndarray,
-    tolerance: np.ndarray,
-    accel_px: float,
-    accel_relative: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Orientation bin and the flow bits a measurement could have had one
-    frame earlier under smooth motion: ``m`` widened by the noise tolerance,
-    ``accel_px`` and ``accel_relative * |m|``. ``theta, m`` are folded, as
-    for :func:`value_words`.
-
-    Returns
-    -------
-    orientation : (…) ndarray of int
-    bits : (…) ndarray of uint64, within a 16-bit slot
-    """
-    allowance = tolerance + accel_px + accel_relative * np.abs(m)
-    lo = flow_bin(m - allowance).astype(np.uint64)
-    hi = flow_bin(m + allowance).astype(np.uint64)
-    bits = ((_ONE << (hi + _ONE)) - _ONE) & ~((_ONE << lo) - _ONE)
-    return orientation_bin(theta), bits
-
-
-def map_slot(map_: np.ndarray, orientation: np.ndarray) -> np.ndarray:
-    """The 16 bits the constraint map holds for each cell's orientation bin."""
-    word = np.take_along_axis(map_, (orientation // SLOTS_PER_WORD)[None], axis=0)[0]
-    return (word >> (np.uint64(SLOT_BITS) * (orientation % SLOTS_PER_WORD).astype(np.uint64))) & (
-        _SLOT_MASK
-    )
 
 
 # ----------------------------------------------------------------------------
@@ -370,48 +270,6 @@ def constraint_map(field: NormalFlowField, config: AnimateConfig) -> np.ndarray:
         np.multiply(words, cover[classes], out=part)  # the words of the classes covering it
         np.bitwise_or(target, part, out=target)
     return out[:, r:-r, r:-r].copy()
-
-
-JITTER_BLOCKS = 4
-
-
-def block_flows(field: NormalFlowField, blocks: int = JITTER_BLOCKS) -> np.ndarray:
-    """Least-squares uniform flow (vx, vy) of each of ``blocks x blocks``
-    blocks, from ``m = v . n`` over its valid cells; NaN where a block has too
-    few cells or too narrow a spread of gradient orientations to fix both
-    components.
-
-    Returns
-    -------
-    (blocks, blocks, 2) ndarray of float64
-    """
-    nx, ny = (np.asarray(c, np.float64) for c in field.normal)
-    w = field.valid.astype(np.float64)
-    m = field.flow_px.astype(np.float64) * w
-    h, wd = w.shape
-    terms = np.stack([nx * nx * w, nx * ny * w, ny * ny * w, nx * m, ny * m, w])
-    sums = terms.reshape(6, blocks, h // blocks, blocks, wd // blocks).sum(axis=(2, 4))
-    sxx, sxy, syy, bx, by, count = sums
-    det = sxx * syy - sxy * sxy
-    ok = (count >= 16) & (det > 0.1 * np.maximum(count, 1) ** 2 / 4)
-    safe = np.where(ok, det, 1.0)
-    vx = (syy * bx - sxy * by) / safe
-    vy = (sxx * by - sxy * bx) / safe
-    return np.where(ok[..., None], np.stack([vx, vy], axis=-1), np.nan)
-
-
-def jitter_shift(previous: np.ndarray, current: np.ndarray) -> np.ndarray:
-    """The frame's global image shift since the previous one, (dx, dy) px.
-
-    Rotational jitter adds the same shift to every block's flow, while smooth
-    observer motion changes each block's flow slowly; the median over blocks
-    of the change keeps a mover in a few blocks from dragging the estimate.
-    """
-    change = (current - previous).reshape(-1, 2)
-    change = change[np.isfinite(change).all(axis=1)]
-    if len(change) < 4:
-        return np.zeros(2)
-    return np.median(change, axis=0)
 
 
 @lru_cache(maxsize=16)

@@ -67,7 +67,7 @@ class FitConfig:
         point is the plane's velocity alone, and any residual is tested.
     """
 
-    sample_step_px: int = 4
+    sample_step_px: int = 8
     ransac_px: float = 1.0
     min_inlier_share: float = 0.25
     max_speed_px: float = 30.0

@@ -81,6 +81,31 @@ def _by_region(a: np.ndarray) -> np.ndarray:
     )
 
 
+def _refine(
+    flow: np.ndarray, best: np.ndarray, best_speed: np.ndarray, voters: np.ndarray,
+    n: np.ndarray, m: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """Least-squares refinement of each region's winner over its voters.
+
+    Solves ``(sum n n^T) v = sum n m``; kept only where the gradients span
+    both axes and the result stays near the winner (an ill-posed region can
+    run away).
+    """
+    a = np.einsum("irp,jrp,rp->rij", n, n, voters.astype(np.float32))
+    b = np.einsum("irp,rp->ri", n, np.where(voters, m, 0.0))
+    det = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] ** 2
+    trace = a[:, 0, 0] + a[:, 1, 1]
+    conditioned = det > 0.05 * trace**2  # gradients span both axes
+    safe = np.where(conditioned, det, 1.0)
+    vx = (a[:, 1, 1] * b[:, 0] - a[:, 0, 1] * b[:, 1]) / safe
+    vy = (a[:, 0, 0] * b[:, 1] - a[:, 0, 1] * b[:, 0]) / safe
+    refined = np.stack([vx, vy], axis=1)
+    near = np.hypot(*(refined - flow).T) <= 0.5 * best_speed + 0.3
+    refine = conditioned & (best > 0) & near
+    flow[refine] = refined[refine]
+    return flow
+
+
 def coarse_field(
     field: NormalFlowField,
     *,
@@ -122,22 +147,8 @@ def coarse_field(
     region = np.arange(REGIONS * REGIONS)
     support = votes[best, region] / np.maximum(count, 1)
 
-    flow = cand[best].copy()
-    # Least-squares refinement over the winner's voters: solve (sum n n^T) v = sum n m.
     voters = within[best, region]  # (16, 256)
-    a = np.einsum("irp,jrp,rp->rij", n, n, voters.astype(np.float32))
-    b = np.einsum("irp,rp->ri", n, np.where(voters, m, 0.0))
-    det = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] ** 2
-    trace = a[:, 0, 0] + a[:, 1, 1]
-    conditioned = det > 0.05 * trace**2  # gradients span both axes
-    safe = np.where(conditioned, det, 1.0)
-    vx = (a[:, 1, 1] * b[:, 0] - a[:, 0, 1] * b[:, 1]) / safe
-    vy = (a[:, 0, 0] * b[:, 1] - a[:, 0, 1] * b[:, 0]) / safe
-    refined = np.stack([vx, vy], axis=1)
-    # Trust the refinement only near the winner: an ill-posed region can run away.
-    near = np.hypot(*(refined - flow).T) <= 0.5 * speed[best] + 0.3
-    refine = conditioned & (best > 0) & near
-    flow[refine] = refined[refine]
+    flow = _refine(cand[best].copy(), best, speed[best], voters, n, m)
 
     angle = np.arctan2(flow[:, 1], flow[:, 0])
     index = np.rint(angle / (2 * np.pi / DIRECTIONS)).astype(int) % DIRECTIONS

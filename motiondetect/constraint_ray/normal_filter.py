@@ -29,12 +29,9 @@ from typing import Literal
 import numpy as np
 
 from motiondetect.config_checks import check_fields
+from motiondetect.constraint_ray.constraint_model import constraint_model
 from motiondetect.constraint_ray.hough import CoarseField, coarse_field
-from motiondetect.constraint_ray.observer_motion import (
-    ObserverMotion,
-    classify,
-    constraint_model,
-)
+from motiondetect.constraint_ray.observer_motion import ObserverMotion, classify
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import drop_isolated, find_regions
 from motiondetect.measurement.luts import BinTable
