@@ -54,7 +54,7 @@ def detect(
     *configs,
     measure: str = "velocity",
     fps: float = 30.0,
-    persistence: int = 2,
+    persistence: int | None = None,
 ) -> Iterator[FrameResult]:
     """Detect independent motion in every frame of ``source``, lazily.
 

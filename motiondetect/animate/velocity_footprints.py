@@ -22,7 +22,7 @@ frame it stops (the constraint ray filter still sees any motion it has).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -63,7 +63,6 @@ class VelocityAnimateConfig:
         An object that broke its motion stays animate this many frames: the
         label is carried with the object, moved by its velocity, so a limb
         reversing every few frames is flagged between reversals too.
-    fit : FitConfig
     """
 
     noise_sigmas: float = 3.0
@@ -73,7 +72,6 @@ class VelocityAnimateConfig:
     open_px: int = 5
     spread_px: float = 6.0
     memory_frames: int = 8
-    fit: FitConfig = field(default_factory=FitConfig)
 
     def __post_init__(self) -> None:
         check_fields(
@@ -171,6 +169,10 @@ class VelocityAnimateDetector:
 
     State: the previous frame's residual velocity field and the animate
     memory (frames left, per pixel).
+
+    The observer motion is the field's ``camera`` (fitted once per frame by
+    :class:`~motiondetect.detection.detector.MotionDetector` with its
+    ``FitConfig``); a field without one is fitted here with the defaults.
     """
 
     name = NAME
@@ -200,7 +202,7 @@ class VelocityAnimateDetector:
 
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         cfg = self.config
-        fit = field.camera if field.camera is not None else fit_camera(field, cfg.fit)
+        fit = field.camera if field.camera is not None else fit_camera(field, FitConfig())
         previous, self._previous = self._previous, fit.residual_px
         if not fit.reliable or previous is None or previous.shape != field.velocity_px.shape:
             return DetectorOutput.empty(field.shape, camera=fit)

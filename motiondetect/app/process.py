@@ -57,7 +57,6 @@ def make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
         *settings.detector_configs(),
         measure=settings.measure,
         egomotion=ego,
-        persistence=settings.persistence,
     )
 
 
@@ -105,7 +104,7 @@ class _FrameWriters:
         if self.masks_dir is not None:
             shutil.rmtree(self.masks_dir, ignore_errors=True)
             self.masks_dir.mkdir()
-        self.size = annotated_size(info.width, info.height, settings.work_size)
+        self.size = annotated_size(info.width, info.height, settings.video_size)
         video = out_dir / f"annotated.{settings.video_format}"
         self.sink = VideoSink(video, info.fps, self.size) if settings.video else None
         with contextlib.ExitStack() as files:  # every file closes, whatever fails first

@@ -1,9 +1,23 @@
-"""Run settings: one table of defaults, read by the CLI and by TOML config files."""
+"""Run settings: one source for every setting and default.
+
+* **Detector settings** are the fields of the frozen config dataclasses
+  (:data:`SECTIONS`); their defaults are written there and nowhere else.
+  A TOML file reaches every field through a section named after its
+  config, e.g. ``[velocity_ray] floor_px = 1.2``.
+* A few of them also have a **command-line option** (:data:`CONFIG_OPTIONS`);
+  the option's default is the field's.
+* **Run settings** (outputs, batch, events) are :data:`RUN_DEFAULTS`.
+
+Command line and TOML go through the same :func:`make_settings`, so both get
+the same range checks and the same one-line messages.
+"""
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+import math
+import typing
+from dataclasses import dataclass
 from pathlib import Path
 
 try:
@@ -12,29 +26,54 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from motiondetect.animate.normal_footprints import AnimateConfig
+from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
+from motiondetect.constraint_ray.camera_fit import FitConfig
 from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
+from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
+from motiondetect.detection.objects import TrackConfig
+from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.normal_flow import StageConfig
 
-#: The defaults, one place. Keys are the long option names with "_" for "-".
-DEFAULTS: dict[str, object] = {
+#: TOML section -> the config dataclass it builds.
+SECTIONS: dict[str, type] = {
+    "stages": StageConfig,
+    "dense_flow": DenseFlowConfig,
+    "fit": FitConfig,
+    "constraint_ray": ConstraintRayConfig,
+    "animate": AnimateConfig,
+    "velocity_ray": VelocityRayConfig,
+    "velocity_animate": VelocityAnimateConfig,
+    "track": TrackConfig,
+}
+
+#: Options that set one config field: option -> (section, field). ``work_size``
+#: sets the working size of whichever measurement ``measure`` chooses.
+CONFIG_OPTIONS: dict[str, tuple[str, str]] = {
+    "persistence": ("track", "persistence"),
+    "flow_preset": ("dense_flow", "preset"),
+    "ego_model": ("constraint_ray", "ego_model"),
+    "arithmetic": ("stages", "arithmetic"),
+    "pyramid": ("stages", "pyramid"),
+    "first_appearance": ("animate", "first_appearance"),
+    "jitter_compensation": ("animate", "jitter_compensation"),
+}
+_WORK_SIZE = {"velocity": "dense_flow", "normal": "stages"}
+
+#: Run settings and their defaults. Keys are the long option names, "_" for "-".
+RUN_DEFAULTS: dict[str, object] = {
     "output": "motiondetect-out",
     "detector": "both",
     "measure": "velocity",
-    "persistence": 2,
+    "work_size": None,  # the chosen measurement's own default (see _WORK_SIZE)
     "masks": False,
     "video": True,
     "video_format": "webm",
-    "work_size": 512,
+    "video_size": 512,
     "egomotion": None,
     "jobs": 1,
     "overwrite": False,
     "recursive": False,
     "frames_fps": 30.0,
-    "ego_model": "fitted",
-    "arithmetic": "float",
-    "pyramid": True,
-    "first_appearance": "ignore",
-    "jitter_compensation": True,
     "min_event_frames": 3,
     "merge_gap_frames": 5,
     "pad_frames": 5,
@@ -46,34 +85,68 @@ DEFAULTS: dict[str, object] = {
     "timeline": True,
 }
 
+#: The checks of run settings: key -> (type, lowest, highest) or a tuple of choices.
+RUN_CHECKS: dict[str, tuple] = {
+    "detector": ("constraint-ray", "animate", "both"),
+    "measure": ("velocity", "normal"),
+    "video_format": ("webm", "mp4"),
+    "work_size": (int, 64, 4096),
+    "video_size": (int, 64, 4096),
+    "jobs": (int, 1, 64),
+    "frames_fps": (float, 0.1, 1000.0),
+    "min_event_frames": (int, 0, None),
+    "merge_gap_frames": (int, 0, None),
+    "pad_frames": (int, 0, None),
+    "min_area": (int, 0, None),
+}
+_FLAGS = ("masks", "video", "overwrite", "recursive", "extract_clips", "clips_annotated")
+_FLAGS += ("timeline",)
+
 
 class SettingsError(ValueError):
     """A setting or config file is wrong; the message is one line for the user."""
 
 
+def default_of(key: str) -> object:
+    """The default of a run setting or of an option that sets a config field."""
+    if key in CONFIG_OPTIONS:
+        section, name = CONFIG_OPTIONS[key]
+        return SECTIONS[section].__dataclass_fields__[name].default
+    if key == "work_size":
+        return {m: default_of_field(s, "work_size") for m, s in _WORK_SIZE.items()}
+    return RUN_DEFAULTS[key]
+
+
+def default_of_field(section: str, name: str) -> object:
+    return SECTIONS[section].__dataclass_fields__[name].default
+
+
+def choices_of(key: str) -> tuple[str, ...]:
+    """The allowed values of a run setting or of an option that sets a config
+    field (from its ``Literal`` annotation)."""
+    if key in CONFIG_OPTIONS:
+        section, name = CONFIG_OPTIONS[key]
+        return typing.get_args(typing.get_type_hints(SECTIONS[section])[name])
+    return RUN_CHECKS[key]
+
+
 @dataclass(frozen=True)
 class Settings:
-    """Everything one run needs. Build it with :func:`make_settings`, which fills
-    every field from :data:`DEFAULTS` (the one table of defaults)."""
+    """Everything one run needs; build it with :func:`make_settings`."""
 
     output: Path
     detector: str
     measure: str
-    persistence: int
+    work_size: int | None
     masks: bool
     video: bool
     video_format: str
-    work_size: int
+    video_size: int
     egomotion: Path | None
     jobs: int
     overwrite: bool
     recursive: bool
     frames_fps: float
-    ego_model: str
-    arithmetic: str
-    pyramid: bool
-    first_appearance: str
-    jitter_compensation: bool
     min_event_frames: int
     merge_gap_frames: int
     pad_frames: int
@@ -83,30 +156,23 @@ class Settings:
     roi_file: Path | None
     min_area: int
     timeline: bool
-    extra: dict = field(default_factory=dict)
+    configs: dict  # section -> config instance
 
-    def stage_config(self) -> StageConfig:
-        return StageConfig(
-            work_size=self.work_size, arithmetic=self.arithmetic, pyramid=self.pyramid
-        )
-
-    def constraint_ray_config(self) -> ConstraintRayConfig:
-        return ConstraintRayConfig(ego_model=self.ego_model)
-
-    def animate_config(self) -> AnimateConfig:
-        return AnimateConfig(
-            first_appearance=self.first_appearance, jitter_compensation=self.jitter_compensation
-        )
+    @property
+    def persistence(self) -> int:
+        return self.configs["track"].persistence
 
     def detector_configs(self) -> tuple:
-        """Every config the detector takes, built from these settings."""
-        return (self.stage_config(), self.constraint_ray_config(), self.animate_config())
+        """Every config the detector takes."""
+        return tuple(self.configs.values())
 
     def to_json(self) -> dict:
         out = {}
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, Path):
+            if f.name == "configs":
+                value = {k: dataclasses.asdict(v) for k, v in value.items()}
+            elif isinstance(value, Path):
                 value = str(value)
             elif isinstance(value, tuple):
                 value = [list(v) if isinstance(v, tuple) else v for v in value]
@@ -115,7 +181,8 @@ class Settings:
 
 
 def load_config_file(path: str | Path) -> dict:
-    """Read a TOML config whose keys are the option names (``-`` or ``_``)."""
+    """Read a TOML config: run settings and flat options at the top (or under
+    ``[motiondetect]``), config fields in sections named as in :data:`SECTIONS`."""
     try:
         with open(path, "rb") as fp:
             doc = tomllib.load(fp)
@@ -124,52 +191,89 @@ def load_config_file(path: str | Path) -> dict:
     except tomllib.TOMLDecodeError as exc:
         raise SettingsError(f"config file {path} is not valid TOML: {exc}") from exc
     doc = doc.get("motiondetect", doc)
-    out = {}
+    out: dict = {}
     for key, value in doc.items():
         name = key.replace("-", "_")
-        if name not in DEFAULTS:
+        if name in SECTIONS:
+            if not isinstance(value, dict):
+                raise SettingsError(f"config file {path}: [{key}] must be a table")
+            out[name] = {k.replace("-", "_"): v for k, v in value.items()}
+        elif name in RUN_DEFAULTS or name in CONFIG_OPTIONS:
+            out[name] = value
+        else:
             raise SettingsError(f"config file {path}: unknown key {key!r}")
-        out[name] = value
     return out
 
 
-def parse_roi(text: str) -> tuple[int, int, int, int]:
+def parse_roi(value) -> tuple[int, int, int, int]:
+    """``"x,y,w,h"`` (or a list of four) in input pixels, inside 0..2**31."""
+    text = value if isinstance(value, str) else ",".join(str(v) for v in value)
     try:
-        x, y, w, h = (int(v) for v in text.split(","))
+        numbers = [float(v) for v in text.split(",")]
+        if len(numbers) != 4 or not all(math.isfinite(v) and v == int(v) for v in numbers):
+            raise ValueError
     except ValueError:
-        raise SettingsError(f"--roi must be x,y,w,h in pixels, but got {text!r}") from None
-    if w <= 0 or h <= 0 or x < 0 or y < 0:
-        raise SettingsError(f"--roi needs a positive width and height, but got {text!r}")
+        raise SettingsError(f"--roi must be x,y,w,h in whole pixels, but got {text!r}") from None
+    x, y, w, h = (int(v) for v in numbers)
+    if w <= 0 or h <= 0 or x < 0 or y < 0 or max(x + w, y + h) > 2**31:
+        raise SettingsError(f"--roi needs a positive width and height in range, but got {text!r}")
     return (x, y, w, h)
 
 
-def make_settings(values: dict) -> Settings:
-    """Validate and build settings from DEFAULTS overridden by ``values``."""
-    merged = {**DEFAULTS, **{k: v for k, v in values.items() if v is not None}}
-    merged["output"] = Path(merged["output"])
-    for key in ("egomotion", "roi_file"):
-        if merged[key] is not None:
-            merged[key] = Path(merged[key])
-    rois = merged["roi"]
-    merged["roi"] = tuple(parse_roi(r) if isinstance(r, str) else tuple(r) for r in rois)
-    if merged["measure"] not in ("velocity", "normal"):
-        raise SettingsError(f"--measure must be velocity or normal, but got {merged['measure']!r}")
-    if merged["video_format"] not in ("webm", "mp4"):
+def _check_run(key: str, value):
+    rule = RUN_CHECKS.get(key)
+    flag = f"--{key.replace('_', '-')}"
+    if key in _FLAGS and not isinstance(value, bool):
+        raise SettingsError(f"{flag} must be true or false, but got {value!r}")
+    if rule is None or value is None:
+        return value
+    if isinstance(rule[0], str):
+        if value not in rule:
+            raise SettingsError(f"{flag} must be one of {', '.join(rule)}, but got {value!r}")
+        return value
+    kind, lo, hi = rule
+    number = value if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+    if number is None or (kind is int and number != int(number)) or not math.isfinite(number):
         raise SettingsError(
-            f"--video-format must be webm or mp4, but got {merged['video_format']!r}"
+            f"{flag} must be {'a whole' if kind is int else 'a'} number, got {value!r}"
         )
-    if merged["persistence"] < 1:
-        raise SettingsError(f"--persistence must be at least 1, but got {merged['persistence']}")
-    if merged["jobs"] < 1:
-        raise SettingsError(f"--jobs must be at least 1, but got {merged['jobs']}")
-    for key in ("min_event_frames", "merge_gap_frames", "pad_frames", "min_area"):
-        if merged[key] < 0:
-            raise SettingsError(f"--{key.replace('_', '-')} must not be negative")
-    try:
-        settings = Settings(**merged)
-        settings.stage_config()
-        settings.constraint_ray_config()
-        settings.animate_config()
-    except (TypeError, ValueError) as exc:
-        raise SettingsError(str(exc)) from exc
-    return settings
+    if number < lo or (hi is not None and number > hi):
+        upper = f" and at most {hi}" if hi is not None else ""
+        raise SettingsError(f"{flag} must be at least {lo}{upper}, but got {value!r}")
+    return kind(number)
+
+
+def _build_configs(values: dict, measure: str, work_size: int | None) -> dict:
+    fields = {section: dict(values.get(section) or {}) for section in SECTIONS}
+    for option, (section, name) in CONFIG_OPTIONS.items():
+        if values.get(option) is not None:
+            fields[section][name] = values[option]
+    if work_size is not None:
+        fields[_WORK_SIZE[measure]]["work_size"] = work_size
+    configs = {}
+    for section, cls in SECTIONS.items():
+        try:
+            configs[section] = cls(**fields[section])
+        except TypeError as exc:
+            raise SettingsError(f"[{section}]: {exc}".replace("__init__() ", "")) from exc
+        except ValueError as exc:
+            raise SettingsError(f"[{section}] {exc}") from exc
+    return configs
+
+
+def make_settings(values: dict) -> Settings:
+    """Validate and build settings: defaults, overridden by ``values`` (None = unset)."""
+    given = {k: v for k, v in values.items() if v is not None}
+    unknown = set(given) - set(RUN_DEFAULTS) - set(CONFIG_OPTIONS) - set(SECTIONS)
+    if unknown:
+        raise SettingsError(f"unknown setting {sorted(unknown)[0]!r}")
+    run = {**RUN_DEFAULTS, **{k: v for k, v in given.items() if k in RUN_DEFAULTS}}
+    run = {k: _check_run(k, v) for k, v in run.items()}
+    run["output"] = Path(run["output"])
+    for key in ("egomotion", "roi_file"):
+        if run[key] is not None:
+            run[key] = Path(run[key])
+    rois = run["roi"]
+    run["roi"] = tuple(parse_roi(r) for r in ((rois,) if isinstance(rois, str) else rois))
+    configs = _build_configs(given, run["measure"], run["work_size"])
+    return Settings(**run, configs=configs)

@@ -24,7 +24,7 @@ their ray are invisible to this test (the blind spot, section 3.3).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -61,7 +61,6 @@ class VelocityRayConfig:
     edge_px : float
         Width of the untested band along the frame edge, work px, on top of
         the frame's median speed.
-    fit : FitConfig
     """
 
     noise_sigmas: float = 3.0
@@ -70,7 +69,6 @@ class VelocityRayConfig:
     grow_ratio: float = 0.5
     close_px: int = 5
     edge_px: float = 4.0
-    fit: FitConfig = field(default_factory=FitConfig)
 
     def __post_init__(self) -> None:
         check_fields(
@@ -147,6 +145,10 @@ class VelocityRayDetector:
     """Flags velocities no rigid world under the fitted (or known) motion allows.
 
     State: the previous epipole, tried first in the next frame's fit.
+
+    The observer motion is the field's ``camera`` (fitted once per frame by
+    :class:`~motiondetect.detection.detector.MotionDetector` with its
+    ``FitConfig``); a field without one is fitted here with the defaults.
     """
 
     name = NAME
@@ -166,7 +168,7 @@ class VelocityRayDetector:
         cfg = self.config
         fit = field.camera
         if fit is None:
-            fit = fit_camera(field, cfg.fit, self._epipole)
+            fit = fit_camera(field, FitConfig(), self._epipole)
             self._epipole = fit.epipole
         known = self.egomotion(frame_index, field.geometry) if self.egomotion else None
         if not fit.reliable and known is None:

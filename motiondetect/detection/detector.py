@@ -129,8 +129,9 @@ class MotionDetector:
         flow's, the fit's and the tracker's; each replaces its defaults.
     egomotion : callable, optional
         Known camera motion, ``egomotion(frame_index, geometry)``.
-    persistence : int
-        Frames an object (or, on the normal path, a region) must persist.
+    persistence : int, optional
+        Frames an object (or, on the normal path, a region) must persist;
+        replaces the ``TrackConfig``'s.
     """
 
     def __init__(
@@ -139,7 +140,7 @@ class MotionDetector:
         *configs,
         measure: str = "velocity",
         egomotion=None,
-        persistence: int = TrackConfig.persistence,
+        persistence: int | None = None,
     ) -> None:
         if measure not in DETECTOR_SETS:
             raise ValueError(f"measure must be one of {sorted(DETECTOR_SETS)}, got {measure!r}")
@@ -147,20 +148,20 @@ class MotionDetector:
             raise ValueError(
                 f"detector must be one of {sorted(DETECTOR_SETS[measure])}, but got {detector!r}"
             )
-        if persistence < 1:
-            raise ValueError(f"persistence must be at least 1, but got {persistence}")
         by_type = {type(c): c for c in configs if c is not None}
+        track = by_type.get(TrackConfig, TrackConfig())
+        if persistence is not None:
+            track = dataclasses.replace(track, persistence=persistence)
         classes = registry()
         self.measure = measure
-        self.persistence = persistence
+        self.persistence = track.persistence
         self.detectors = {
             name: classes[name](by_type.get(classes[name].config_type), egomotion)
             for name in DETECTOR_SETS[measure][detector]
         }
         self.min_cells = min(getattr(d.config, "min_cells", 3) for d in self.detectors.values())
         self.fit_config = by_type.get(FitConfig, FitConfig())
-        track = by_type.get(TrackConfig, TrackConfig())
-        self.tracker = Tracker(dataclasses.replace(track, persistence=persistence))
+        self.tracker = Tracker(track)
         if measure == "velocity":
             self.pipeline = DenseFlow(by_type.get(DenseFlowConfig))
         else:

@@ -1,0 +1,244 @@
+"""``motiondetect detect``: click builds the settings, one library call runs them."""
+
+from __future__ import annotations
+
+import logging
+import sys
+from pathlib import Path
+
+import click
+from motiondetect_cli.common import _fail, _guard, _setup_logging
+from tqdm import tqdm
+from tqdm.contrib.logging import logging_redirect_tqdm
+
+from motiondetect.app.settings import (
+    SettingsError,
+    choices_of,
+    default_of,
+    load_config_file,
+    make_settings,
+)
+
+log = logging.getLogger("motiondetect")
+
+
+def _d(key: str) -> str:
+    value = default_of(key)
+    if isinstance(value, dict):
+        value = ", ".join(f"{v} with --measure {k}" for k, v in value.items())
+    return f"(default: {value})"
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option(
+    "-o", "--output", type=click.Path(path_type=Path), help=f"Output folder {_d('output')}."
+)
+@click.option(
+    "--detector",
+    type=click.Choice(choices_of("detector")),
+    help=f"Which detector {_d('detector')}.",
+)
+@click.option(
+    "--measure",
+    type=click.Choice(choices_of("measure")),
+    help="Motion measurement: the dense 2-D velocity, or the paper's 64x64 normal flow "
+    f"{_d('measure')}.",
+)
+@click.option(
+    "--persistence",
+    type=int,
+    help="Report a region only if it overlaps flagged cells in each of the previous "
+    f"N-1 frames; 1 is the detectors' raw output {_d('persistence')}.",
+)
+@click.option("--masks/--no-masks", default=None, help="Write masks/NNNNNN.png (0/255).")
+@click.option("--video/--no-video", default=None, help="Write annotated.webm (default: on).")
+@click.option(
+    "--video-format",
+    type=click.Choice(choices_of("video_format")),
+    help="annotated.webm (VP8, plays in browsers) or annotated.mp4 (MPEG-4 Part 2, "
+    f"several times faster to encode, not for browsers) {_d('video_format')}.",
+)
+@click.option(
+    "--work-size",
+    type=int,
+    help=f"Long side of the working resolution, px, never above the input's {_d('work_size')}.",
+)
+@click.option(
+    "--flow-preset",
+    type=click.Choice(choices_of("flow_preset")),
+    help=f"Dense-flow (DIS) preset of the velocity measurement {_d('flow_preset')}.",
+)
+@click.option(
+    "--video-size",
+    type=int,
+    help=f"Long side of the annotated video, px {_d('video_size')}.",
+)
+@click.option(
+    "--egomotion",
+    type=click.Path(path_type=Path, exists=True, dir_okay=False),
+    help="Known camera motion (motiondetect ego-motion JSON or NeRF transforms.json).",
+)
+@click.option("-j", "--jobs", type=int, help="Inputs processed in parallel.")
+@click.option(
+    "--overwrite/--no-overwrite",
+    default=None,
+    help="Redo inputs already finished (default: skip them).",
+)
+@click.option(
+    "-r",
+    "--recursive/--no-recursive",
+    default=None,
+    help="Descend into sub-folders of a batch directory.",
+)
+@click.option(
+    "--frames-fps",
+    type=float,
+    help=f"Frame rate of image-sequence inputs {_d('frames_fps')}.",
+)
+@click.option(
+    "--ego-model",
+    type=click.Choice(choices_of("ego_model")),
+    help=f"Constraint ray model {_d('ego_model')}.",
+)
+@click.option(
+    "--arithmetic",
+    type=click.Choice(choices_of("arithmetic")),
+    help=f"Stage arithmetic {_d('arithmetic')}.",
+)
+@click.option("--pyramid/--no-pyramid", default=None, help="Coarse level for fast motion (on).")
+@click.option(
+    "--first-appearance",
+    type=click.Choice(choices_of("first_appearance")),
+    help=f"Animate detector: motion no footprint predicted {_d('first_appearance')}.",
+)
+@click.option(
+    "--jitter-compensation/--no-jitter-compensation",
+    default=None,
+    help="Animate detector: remove the frame's global jitter shift (on).",
+)
+@click.option("--min-event-frames", type=int, help=f"Shortest event {_d('min_event_frames')}.")
+@click.option("--merge-gap-frames", type=int, help=f"Gap bridged {_d('merge_gap_frames')}.")
+@click.option("--pad-frames", type=int, help=f"Event padding {_d('pad_frames')}.")
+@click.option(
+    "--extract-clips/--no-extract-clips",
+    default=None,
+    help="Write events/event_NNNN.mp4, one clip per event.",
+)
+@click.option(
+    "--clips-annotated/--no-clips-annotated", default=None, help="Draw the detections on the clips."
+)
+@click.option(
+    "--roi", multiple=True, metavar="X,Y,W,H", help="Region of interest in input px (repeatable)."
+)
+@click.option(
+    "--roi-file",
+    type=click.Path(path_type=Path, exists=True, dir_okay=False),
+    help="Polygons, one per line: 'x,y x,y x,y ...'.",
+)
+@click.option("--min-area", type=int, help="Drop detections smaller than this, px.")
+@click.option("--timeline/--no-timeline", default=None, help="Write timeline.png (on).")
+@click.option(
+    "--config",
+    "config_file",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="TOML file with the same keys as these options.",
+)
+@click.option("-q", "--quiet", is_flag=True, help="No progress bars or tables.")
+@click.option("-v", "--verbose", is_flag=True, help="Debug logging and tracebacks.")
+def detect(inputs, config_file, quiet, verbose, **options) -> None:
+    """Detect independent motion in videos, frame folders or directories of videos."""
+    from motiondetect.app.runner import InputError, run
+
+    _setup_logging(verbose, quiet)
+    with _guard(verbose):
+        try:
+            values = load_config_file(config_file) if config_file else {}
+            values.update({k: v for k, v in options.items() if v is not None and v != ()})
+            settings = make_settings(values)
+        except SettingsError as exc:
+            raise click.UsageError(str(exc)) from exc
+        bars = _Bars(quiet)
+        with logging_redirect_tqdm(loggers=[log]):
+            try:
+                result = run(
+                    list(inputs),
+                    settings,
+                    on_start=bars.on_start if settings.jobs == 1 else None,
+                    on_done=bars.on_done,
+                    on_jobs=bars.on_jobs,
+                )
+            except InputError as exc:
+                _fail(str(exc))
+            finally:
+                bars.close()
+        if not quiet:
+            _print_summary(result)
+        if result.failed:
+            click.echo(f"{len(result.failed)} of {len(result.results)} inputs failed:", err=True)
+            for failure in result.failed:
+                click.echo(f"  {failure.message}", err=True)
+        sys.exit(result.exit_code)
+
+
+class _Bars:
+    """Progress bars: one per input (frames) and one for the batch (inputs).
+
+    A failure is logged as it happens unless ``quiet``; the closing list
+    names every failure once more, so ``-q`` prints each exactly once.
+    """
+
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.frame: tqdm | None = None
+        self.overall: tqdm | None = None
+
+    def on_start(self, job, expected):
+        if self.quiet:
+            return None
+        bar = tqdm(desc=str(job.name)[-30:], unit="frame", leave=False, dynamic_ncols=True)
+        self.frame = bar
+
+        def progress(done, total):
+            if total and bar.total != total:
+                bar.total = total
+            bar.update(done - bar.n)
+
+        return progress
+
+    def on_jobs(self, count: int) -> None:
+        if count > 1 and not self.quiet:
+            self.overall = tqdm(total=count, desc="inputs", unit="input", dynamic_ncols=True)
+
+    def on_done(self, result) -> None:
+        if self.frame is not None:
+            self.frame.close()
+            self.frame = None
+        if self.overall is not None:
+            self.overall.update(1)
+        if result.status == "failed" and not self.quiet:
+            log.error("%s", result.message)
+
+    def close(self) -> None:
+        if self.overall is not None:
+            self.overall.close()
+
+
+def _print_summary(result) -> None:
+    for r in result.results:
+        if r.status == "done":
+            s = r.summary
+            click.echo(
+                f"{r.job.name}: {s['totals']['frames']} frames, {s['totals']['detections']} "
+                f"detections, {s['totals']['events']} events, {s['speed']['frames_per_s']} fps"
+                + (" (partial input)" if s["status"] == "partial" else "")
+            )
+            for ev in s["events"][:10]:
+                click.echo(
+                    f"  event {ev['event']}: {ev['start_timecode']} - {ev['end_timecode']}"
+                    f"  peak {ev['peak_score']:.2f}  {'+'.join(ev['detectors'])}"
+                )
+            if len(s["events"]) > 10:
+                click.echo(f"  ... {len(s['events']) - 10} more in events.csv")
+        elif r.status == "skipped":
+            click.echo(f"{r.job.name}: skipped, {r.message}")

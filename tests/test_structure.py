@@ -1,0 +1,121 @@
+"""The house rules (issue 17): sizes, layers, and one source for settings."""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from motiondetect_cli.detect import detect
+from motiondetect_cli.main import main
+
+from motiondetect.app.settings import (
+    CONFIG_OPTIONS,
+    RUN_DEFAULTS,
+    SECTIONS,
+    SettingsError,
+    load_config_file,
+    make_settings,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+SOURCES = sorted([*(ROOT / "motiondetect").rglob("*.py"), *(ROOT / "cli").rglob("*.py")])
+
+#: Layers, lowest first; a module may import its own layer and those below.
+LAYERS = {
+    "config_checks": 0, "io.files": 0, "measurement": 0,
+    "detection.base": 1, "detection.regions": 1,
+    "constraint_ray": 2, "animate": 2, "detection": 3, "io": 4, "app": 5, "tools": 5,
+}  # fmt: skip
+
+
+def _layer(module: str) -> int | None:
+    parts = module.split(".")[1:]
+    for n in (2, 1):
+        key = ".".join(parts[:n])
+        if key in LAYERS:
+            return LAYERS[key]
+    return None
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_modules_and_functions_stay_small(path):
+    source = path.read_text()
+    assert len(source.splitlines()) <= 400
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            assert node.end_lineno - node.lineno + 1 <= 60, f"{node.name} is too long"
+
+
+@pytest.mark.parametrize(
+    "path", [p for p in SOURCES if "motiondetect" in p.parts], ids=lambda p: p.name
+)
+def test_imports_run_down_the_layers(path):
+    module = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+    own = _layer(module)
+    if own is None:
+        return
+    tree = ast.parse(path.read_text())
+    for node in tree.body:  # module-level imports only: registries import lazily
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("motiondetect."):
+            other = _layer(node.module)
+            assert other is None or other <= own, f"{module} imports {node.module}"
+
+
+def test_every_option_is_a_setting_and_every_setting_an_option():
+    params = {p.name for p in detect.params} - {"inputs", "config_file", "quiet", "verbose"}
+    settable = set(RUN_DEFAULTS) | set(CONFIG_OPTIONS)
+    assert params == settable
+
+
+def test_every_config_field_is_reachable_from_toml(tmp_path):
+    lines = []
+    for section, cls in SECTIONS.items():
+        lines.append(f"[{section}]")
+        for f in dataclasses.fields(cls):
+            value = f.default
+            if isinstance(value, bool):
+                lines.append(f"{f.name} = {str(value).lower()}")
+            elif isinstance(value, (int, float)) and value == value and abs(value) != float("inf"):
+                lines.append(f"{f.name} = {value!r}")
+            elif isinstance(value, str):
+                lines.append(f'{f.name} = "{value}"')
+    (tmp_path / "all.toml").write_text("\n".join(lines) + "\n")
+    settings = make_settings(load_config_file(tmp_path / "all.toml"))
+    for section, cls in SECTIONS.items():
+        assert settings.configs[section] == cls()
+    (tmp_path / "one.toml").write_text("measure = 'normal'\n[velocity_ray]\nfloor_px = 1.7\n")
+    changed = make_settings(load_config_file(tmp_path / "one.toml"))
+    assert changed.configs["velocity_ray"].floor_px == 1.7 and changed.measure == "normal"
+
+
+@pytest.mark.parametrize(
+    ("toml", "option", "message"),
+    [
+        ("frames_fps = nan", ["--frames-fps", "nan"], "--frames-fps must be a number"),
+        ("jobs = 0", ["--jobs", "0"], "--jobs must be at least 1"),
+        ("persistence = 0", ["--persistence", "0"], "persistence must be positive"),
+        ("roi = ['0,0,-5,5']", ["--roi", "0,0,-5,5"], "--roi needs a positive width"),
+        ("roi = ['0,0,99999999999,10']", ["--roi", "0,0,99999999999,10"], "in range"),
+    ],
+)
+def test_command_line_and_config_file_refuse_alike(tmp_path, toml, option, message):
+    (tmp_path / "c.toml").write_text(toml + "\n")
+    with pytest.raises(SettingsError, match=message):
+        make_settings(load_config_file(tmp_path / "c.toml"))
+    runner = CliRunner()
+    clip = ROOT / "sample_videos" / "uniform_rigid" / "video.mp4"
+    for args in (option, ["--config", str(tmp_path / "c.toml")]):
+        result = runner.invoke(main, ["detect", str(clip), "-o", str(tmp_path / "o"), *args])
+        assert result.exit_code == 2 and message in result.output, result.output
+
+
+def test_wrong_types_in_the_config_file_get_one_line(tmp_path):
+    (tmp_path / "c.toml").write_text('work_size = "big"\n[track]\ngap_px = "wide"\n')
+    with pytest.raises(SettingsError, match="--work-size must be a whole number"):
+        make_settings(load_config_file(tmp_path / "c.toml"))
+    (tmp_path / "d.toml").write_text('[track]\ngap_px = "wide"\n[nonsense]\nx = 1\n')
+    with pytest.raises(SettingsError, match="unknown key 'nonsense'"):
+        load_config_file(tmp_path / "d.toml")
