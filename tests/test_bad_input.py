@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 
 import cv2
 import numpy as np
@@ -97,14 +98,28 @@ def test_16_bit_and_grey_sequences(tmp_path, frames, kind):
     check_outputs(tmp_path / "o" / kind, 6)
 
 
-def test_gap_and_stray_file_in_frames_folder(tmp_path, frames, caplog):
+def test_gap_and_stray_file_in_frames_folder(tmp_path, frames):
     seq = tmp_path / "seq"
     seq.mkdir()
     for n in (1, 2, 3, 7, 8, 10):
         cv2.imwrite(str(seq / f"frame_{n}.jpg"), frames[n])
     (seq / "notes.txt").write_text("stray")
-    with open_source(seq) as source:
-        numbers = [f.number for f in source]
+    records = []
+    handler = logging.Handler()
+    handler.emit = records.append
+    logger = logging.getLogger("motiondetect")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.WARNING)
+    try:
+        with open_source(seq) as source:
+            numbers = [f.number for f in source]
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+    messages = [r.getMessage() for r in records if r.levelno == logging.WARNING]
+    assert any("non-image" in m and "notes.txt" in m for m in messages), messages
+    assert any("2 gaps" in m for m in messages), messages
     assert numbers == [1, 2, 3, 7, 8, 10]  # numeric, not lexicographic, order
     result = run("detect", seq, "-o", tmp_path / "o", "-q")
     assert result.exit_code == 0

@@ -10,7 +10,7 @@ from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.constraint_ray.hough import STILL, UNKNOWN, coarse_field
 from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
 from motiondetect.constraint_ray.observer_motion import UNBOUNDED, canonical_library, classify
-from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField, fold_direction
+from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowField
 
 from .scenes import class_accuracy, run_detector, scene
 
@@ -83,11 +83,6 @@ def test_bit_test_agrees_with_the_exact_interval():
     )
     tol = np.full((64, 64), 0.05, np.float32)
     flagged = cr.check_measurements(model, field, tol)
-    folded, mf = fold_direction(theta, m)
-    bins = cr.direction_bin(folded)
-    allowed = np.take_along_axis(filt, bins[..., None], axis=2)[..., 0]
-    from_image = field.valid & ((allowed & cr.encode_interval(mf - tol, mf + tol)) == 0)
-    np.testing.assert_array_equal(flagged, from_image)  # the image and the per-cell path agree
     lo, hi = cr.allowed_interval(vw, vxy, 3.0, np.cos(theta), np.sin(theta))
     outside = (m + 1.0 < lo) | (m - 1.0 > hi)  # clearly outside: must be flagged
     inside = (m >= lo) & (m <= hi)  # inside: must never be flagged
@@ -143,27 +138,34 @@ def test_still_regions_and_static_observer():
     assert class_id == 0 and conf > 0.9
 
 
-@pytest.mark.parametrize("index", range(0, 120, 7))
-def test_every_library_entry_classifies_as_itself(index):
-    geometry = GridGeometry((512, 384), (512, 384))
-    library = canonical_library(geometry)
-    entry = library[index % len(library)]
-    from motiondetect.constraint_ray.hough import CoarseField
+W4, H4 = 512, 384
 
-    units = entry.template
-    if entry.axial:  # class 5: half the regions one way, half the other
-        units = units * np.where(np.arange(16).reshape(4, 4) % 2, 1.0, -1.0)[..., None]
-    angle = np.arctan2(units[..., 1], units[..., 0])
-    idx = np.rint(angle / (np.pi / 4)).astype(int) % 8
-    idx[np.linalg.norm(units, axis=-1) < 0.5] = STILL
-    coarse = CoarseField(
-        idx.astype(np.int8),
-        (units * 2).astype(np.float32),
-        np.ones((4, 4), np.float32),
-        np.full((4, 4), 256),
-    )
-    found, class_id, _ = classify(coarse, geometry)
-    assert class_id == entry.class_id
+
+def _expansion(focus, rate=0.01):
+    return lambda x, y: (rate * (x - focus[0]), rate * (y - focus[1]))
+
+
+# Flow fields of known observer motions (not the library's own templates).
+KNOWN_MOTIONS = {
+    "translation right": (lambda x, y: (2.0 + 0 * x, 0 * y), {1}),
+    "translation down-left": (lambda x, y: (-1.5 + 0 * x, 1.5 + 0 * y), {1}),
+    "forward, focus at the centre": (_expansion((W4 / 2, H4 / 2)), {2}),
+    "forward, focus off centre": (_expansion((0.25 * W4, 0.7 * H4)), {2, 3}),
+    "backward (contraction)": (_expansion((W4 / 2, H4 / 2), rate=-0.01), {2, 3}),
+    "fixation: near half one way, far half the other": (
+        lambda x, y: (np.where(y > H4 / 2, -2.0, 2.0), 0 * y),
+        {5},
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(KNOWN_MOTIONS))
+def test_known_observer_motions_classify_right(name):
+    flow, classes = KNOWN_MOTIONS[name]
+    geometry = GridGeometry((W4, H4), (W4, H4))
+    coarse = coarse_field(synthetic_field(flow, geometry, noise=0.05))
+    _, class_id, confidence = classify(coarse, geometry)
+    assert class_id in classes and confidence > 0.3
 
 
 def test_library_has_all_five_classes():
@@ -174,16 +176,20 @@ def test_library_has_all_five_classes():
 # --- Synthetic scenes with exact ground truth --------------------------------------
 
 # Per class: (minimum class accuracy, minimum object recall, maximum false-alarm
-# regions per frame on the rigid scene). Measured figures are in docs/detectors.md;
-# these bounds sit just under them so a regression fails.
+# regions per frame on the rigid scene), on these 24-frame test scenes. Measured
+# (class accuracy / object recall / FA per frame): static 1.00 / 1.00 / 0.00,
+# uniform 1.00 / 1.00 / 0.18, pan 1.00 / 1.00 / 0.05, forward 1.00 / 0.64 / 0.14,
+# oblique 1.00 / 1.00 / 0.36, forward-yaw 0.59 / 0.68 / 0.73, fixation 1.00 /
+# 0.00 / 0.00 (the fixation miss is documented in docs/detectors.md). The bounds
+# sit just past those figures, so a regression fails.
 SCENE_BOUNDS = {
-    "static": (0.9, 0.8, 0.2),
-    "uniform": (0.9, 0.8, 0.2),
-    "pan": (0.9, 0.8, 0.2),
-    "forward": (0.9, 0.3, 0.2),
-    "oblique": (0.9, 0.8, 0.5),
-    "forward-yaw": (0.5, 0.3, 0.8),
-    "fixation": (0.85, None, 0.4),
+    "static": (0.95, 0.95, 0.05),
+    "uniform": (0.95, 0.95, 0.3),
+    "pan": (0.95, 0.95, 0.15),
+    "forward": (0.95, 0.55, 0.25),
+    "oblique": (0.95, 0.95, 0.45),
+    "forward-yaw": (0.5, 0.55, 0.85),
+    "fixation": (0.95, None, 0.1),
 }
 
 

@@ -85,11 +85,17 @@ def test_seeded_fuzz_corrupted_videos_process_or_fail_cleanly(tmp_path, frames):
         )
         assert proc.returncode in (0, 1), proc.stderr
         assert "Traceback" not in proc.stderr
-        if proc.returncode == 1:
-            errors = [x for x in proc.stderr.splitlines() if x.startswith("error") or "fuzz" in x]
-            assert errors, proc.stderr
+        out = tmp_path / "o" / path.stem
+        if proc.returncode == 1:  # one line naming the input, and nothing that looks finished
+            errors = [x for x in proc.stderr.splitlines() if path.name in x]
+            assert len(errors) == 1, proc.stderr
+            assert not (out / "summary.json").exists()
+        else:  # processed: complete outputs whose frame count matches the summary
+            summary = json.loads((out / "summary.json").read_text())
+            lines = (out / "frames.jsonl").read_text().splitlines()
+            assert len(lines) == summary["totals"]["frames"] >= 1
         outcomes.append(proc.returncode)
-    assert outcomes.count(0) + outcomes.count(1) == 10
+    assert set(outcomes) == {0, 1}  # the seed damages some files beyond use and not others
 
 
 def test_8k_frames_are_processed_at_the_working_resolution(tmp_path):
