@@ -29,8 +29,8 @@ import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
-from motiondetect.constraint_ray.velocity_filter import hysteresis
 from motiondetect.detection.base import DetectorOutput
+from motiondetect.detection.regions import hysteresis
 from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-animate"

@@ -33,10 +33,10 @@ from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DetectorOutput
+from motiondetect.detection.regions import hysteresis
 from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-ray"
-_SQUARE3 = np.ones((3, 3), np.uint8)
 
 
 @dataclass(frozen=True)
@@ -121,24 +121,6 @@ def without_frame_edge(distance: np.ndarray, band_px: float) -> np.ndarray:
     out = distance.copy()
     out[:b], out[-b:], out[:, :b], out[:, -b:] = 0, 0, 0, 0
     return out
-
-
-def hysteresis(
-    distance: np.ndarray, tolerance: float, grow_ratio: float, seeds: np.ndarray | None = None
-) -> np.ndarray:
-    """Points off the ray by ``tolerance`` (opened 3x3), grown over those off by
-    ``grow_ratio * tolerance`` that connect to them. (h, w) bool.
-
-    ``seeds`` (bool), when given, replaces the strong points as the seeds."""
-    if seeds is None:
-        seeds = distance > tolerance
-    strong = cv2.morphologyEx(seeds.astype(np.uint8), cv2.MORPH_OPEN, _SQUARE3)
-    weak = (distance > grow_ratio * tolerance).astype(np.uint8)
-    count, labels = cv2.connectedComponents(weak, connectivity=8)
-    keep = np.zeros(count, bool)
-    keep[np.unique(labels[strong > 0])] = True
-    keep[0] = False
-    return keep[labels]
 
 
 class VelocityRayDetector:

@@ -110,3 +110,24 @@ def regions_mask(regions: list[Region], shape: tuple[int, int] = (64, 64)) -> np
     for region in regions:
         mask[region.cells[:, 0], region.cells[:, 1]] = True
     return mask
+
+
+_SQUARE3 = np.ones((3, 3), np.uint8)
+
+
+def hysteresis(
+    distance: np.ndarray, tolerance: float, grow_ratio: float, seeds: np.ndarray | None = None
+) -> np.ndarray:
+    """Points off the ray by ``tolerance`` (opened 3x3), grown over those off by
+    ``grow_ratio * tolerance`` that connect to them. (h, w) bool.
+
+    ``seeds`` (bool), when given, replaces the strong points as the seeds."""
+    if seeds is None:
+        seeds = distance > tolerance
+    strong = cv2.morphologyEx(seeds.astype(np.uint8), cv2.MORPH_OPEN, _SQUARE3)
+    weak = (distance > grow_ratio * tolerance).astype(np.uint8)
+    count, labels = cv2.connectedComponents(weak, connectivity=8)
+    keep = np.zeros(count, bool)
+    keep[np.unique(labels[strong > 0])] = True
+    keep[0] = False
+    return keep[labels]
