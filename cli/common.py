@@ -6,16 +6,39 @@ import logging
 import sys
 
 import click
+from tqdm import tqdm
 
 log = logging.getLogger("motiondetect")
 
 
-def _setup_logging(verbose: bool, quiet: bool) -> None:
+class _BarSafeHandler(logging.Handler):
+    """To stderr through ``tqdm.write``, so log lines never break a progress bar."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            tqdm.write(self.format(record), file=sys.stderr)
+        except Exception:  # noqa: BLE001 - logging must never raise
+            self.handleError(record)
+
+
+def _setup_logging(verbose: bool, quiet: bool, logfile=None) -> None:
+    """stderr at WARNING (ERROR with -q, DEBUG with -v); ``logfile`` gets
+    everything, DEBUG included, with timestamps."""
     level = logging.DEBUG if verbose else (logging.ERROR if quiet else logging.WARNING)
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _BarSafeHandler()
     handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
-    log.handlers[:] = [handler]
-    log.setLevel(level)
+    handler.setLevel(level)
+    handlers: list[logging.Handler] = [handler]
+    if logfile is not None:
+        try:
+            to_file = logging.FileHandler(logfile, encoding="utf-8")
+        except OSError as exc:
+            message = f"cannot open --logfile {logfile}: {exc.strerror or exc}"
+            raise click.UsageError(message) from None
+        to_file.setFormatter(logging.Formatter("%(asctime)s %(levelname)s: %(message)s"))
+        handlers.append(to_file)
+    log.handlers[:] = handlers
+    log.setLevel(logging.DEBUG if logfile is not None else level)
     log.propagate = False
 
 

@@ -9,7 +9,6 @@ from pathlib import Path
 import click
 from motiondetect_cli.common import _fail, _guard, _setup_logging
 from tqdm import tqdm
-from tqdm.contrib.logging import logging_redirect_tqdm
 
 from motiondetect.app.settings import (
     SettingsError,
@@ -94,7 +93,7 @@ def _d(key: str) -> str:
 @click.option(
     "--frames-fps",
     type=float,
-    help=f"Frame rate of image-sequence inputs {_d('frames_fps')}.",
+    help="Frame rate of image-sequence inputs (default: 30, reported as assumed).",
 )
 @click.option(
     "--ego-model",
@@ -121,6 +120,20 @@ def _d(key: str) -> str:
 @click.option("--merge-gap-frames", type=int, help=f"Gap bridged {_d('merge_gap_frames')}.")
 @click.option("--pad-frames", type=int, help=f"Event padding {_d('pad_frames')}.")
 @click.option(
+    "--min-event", metavar="TIME", help="Shortest event as a time (1.5s, 00:00:01.5 or 45f)."
+)
+@click.option("--merge-gap", metavar="TIME", help="Gap bridged, as a time.")
+@click.option("--pad", metavar="TIME", help="Event padding, as a time.")
+@click.option(
+    "--start", metavar="TIME", help="Start here: seconds (12.5), a timecode (00:00:12.5) or 45f."
+)
+@click.option("--end", metavar="TIME", help="Stop here (seconds end before it; frames include it).")
+@click.option(
+    "--thumbnails/--no-thumbnails",
+    default=None,
+    help="Write thumbnails/event_NNNN.jpg: each event's peak frame with its boxes.",
+)
+@click.option(
     "--extract-clips/--no-extract-clips",
     default=None,
     help="Write events/event_NNNN.mp4, one clip per event.",
@@ -144,13 +157,24 @@ def _d(key: str) -> str:
     type=click.Path(path_type=Path, dir_okay=False),
     help="TOML file with the same keys as these options.",
 )
+@click.option(
+    "--logfile",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="Also write the log here, debug messages included.",
+)
+@click.option(
+    "--print-events",
+    is_flag=True,
+    help="Print the events as CSV on stdout (with -q, nothing else is printed there).",
+)
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars or tables.")
 @click.option("-v", "--verbose", is_flag=True, help="Debug logging and tracebacks.")
-def detect(inputs, config_file, quiet, verbose, **options) -> None:
+def detect(inputs, config_file, quiet, verbose, logfile, print_events, **options) -> None:
     """Detect independent motion in videos, frame folders or directories of videos."""
-    from motiondetect.app.runner import InputError, run
+    from motiondetect.app.runner import InputError, batch_events, run
+    from motiondetect.io.report import write_events_csv
 
-    _setup_logging(verbose, quiet)
+    _setup_logging(verbose, quiet, logfile)
     with _guard(verbose):
         try:
             values = load_config_file(config_file) if config_file else {}
@@ -159,20 +183,22 @@ def detect(inputs, config_file, quiet, verbose, **options) -> None:
         except SettingsError as exc:
             raise click.UsageError(str(exc)) from exc
         bars = _Bars(quiet)
-        with logging_redirect_tqdm(loggers=[log]):
-            try:
-                result = run(
-                    list(inputs),
-                    settings,
-                    on_start=bars.on_start if settings.jobs == 1 else None,
-                    on_done=bars.on_done,
-                    on_jobs=bars.on_jobs,
-                )
-            except InputError as exc:
-                _fail(str(exc))
-            finally:
-                bars.close()
-        if not quiet:
+        try:
+            result = run(
+                list(inputs),
+                settings,
+                on_start=bars.on_start if settings.jobs == 1 else None,
+                on_done=bars.on_done,
+                on_jobs=bars.on_jobs,
+            )
+        except InputError as exc:
+            _fail(str(exc))
+        finally:
+            bars.close()
+        if print_events:
+            rows = batch_events(settings.output, result.results)
+            write_events_csv(sys.stdout, rows, with_input=len(result.results) > 1)
+        elif not quiet:
             _print_summary(result)
         if result.failed:
             click.echo(f"{len(result.failed)} of {len(result.results)} inputs failed:", err=True)

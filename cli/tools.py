@@ -36,7 +36,9 @@ def info(inputs, as_json) -> None:
         else:
             click.echo(
                 f"{path}: {meta['kind']}, {meta['width']}x{meta['height']}, "
-                f"{meta['fps']:.3f} fps, {meta['frame_count']} frames, "
+                f"{meta['fps']:.3f} fps"
+                + (" (assumed)" if meta["fps_source"] == "assumed" else "")
+                + f", {meta['frame_count']} frames, "
                 f"{meta['duration_s']:.2f} s, codec {meta['codec']}"
                 + (f", rotation {meta['rotation_deg']} deg" if meta["rotation_deg"] else "")
             )
@@ -157,7 +159,28 @@ def synth(
     help="Write the table as .csv or .json.",
 )
 def evaluate(pred, gt, warmup, output) -> None:
-    """Score predicted masks (detect --masks) against ground-truth masks."""
+    """Score predicted masks (detect --masks) against ground-truth masks.
+
+    Pixels follow changedetection.net: ground truth 0 is background, 255 mover,
+    85 and 170 are not scored. The columns:
+
+    \b
+    recall   share of mover pixels flagged (TP / (TP + FN))
+    spec     specificity: share of background pixels left alone (TN / (TN + FP))
+    FPR      false positive rate: background pixels flagged (FP / (FP + TN))
+    FNR      false negative rate: mover pixels missed (FN / (TP + FN))
+    PWC      percentage of wrong classifications: 100 (FN + FP) / all scored pixels
+    prec     precision: share of flagged pixels that are mover (TP / (TP + FP))
+    F        F-measure: harmonic mean of precision and recall
+    obj.rec  object recall: share of (frame, object) pairs with >= 10 % of
+             the object's pixels flagged
+    FA/frm   false-alarm regions per frame: flagged connected regions that
+             touch no mover or unknown pixel
+    cellF1   F1 over 10x10-pixel cells: a mover cell is >= 30 % mover, a
+             background cell <= 5 % mover or unknown, a flagged cell >= 30 %
+             flagged; cells in between are not scored
+    frames   frames scored (warm-up frames and frames without ground truth are not)
+    """
     from motiondetect.io.report import atomic_text
     from motiondetect.tools.evaluate import EvaluateError, format_table, table_rows
     from motiondetect.tools.evaluate import evaluate as run_evaluate

@@ -65,7 +65,8 @@ def test_imports_run_down_the_layers(path):
 
 
 def test_every_option_is_a_setting_and_every_setting_an_option():
-    params = {p.name for p in detect.params} - {"inputs", "config_file", "quiet", "verbose"}
+    presentation = {"inputs", "config_file", "quiet", "verbose", "logfile", "print_events"}
+    params = {p.name for p in detect.params} - presentation
     settable = set(RUN_DEFAULTS) | set(CONFIG_OPTIONS)
     assert params == settable
 

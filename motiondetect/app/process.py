@@ -13,12 +13,13 @@ import shutil
 import time
 from pathlib import Path
 
+from motiondetect.app.clips import extract_clips, write_thumbnails
 from motiondetect.app.inputs import InputError, InputJob, InputResult, Progress
 from motiondetect.app.roi import keep_detections, roi_mask
 from motiondetect.app.settings import Settings
 from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
 from motiondetect.detection.detector import FrameResult, MotionDetector
-from motiondetect.detection.events import EventRules, EventTimeline
+from motiondetect.detection.events import EventTimeline
 from motiondetect.io.annotate import annotate, annotated_size
 from motiondetect.io.files import TEMPORARY_PREFIX
 from motiondetect.io.records import frame_record, summary_record
@@ -37,7 +38,7 @@ from motiondetect.io.video import (
     VideoSink,
     open_source,
     to_display,
-    write_png,
+    write_image,
 )
 
 log = logging.getLogger("motiondetect")
@@ -74,7 +75,22 @@ def process_input(
     """Detect motion in one input and write its outputs. Never raises for bad input."""
     out_dir = settings.output / job.name
     if (out_dir / "summary.json").exists() and not settings.overwrite:
+        log.info("%s: skipped, already finished", job.path)
         return InputResult(job, "skipped", "already finished (use --overwrite to redo)")
+    log.info("%s: processing into %s", job.path, out_dir)
+    result = _guarded(job, settings, out_dir, progress)
+    if result.status == "done":
+        totals = result.summary["totals"]
+        log.info("%s: done, %d frames, %d events", job.path, totals["frames"], totals["events"])
+    else:
+        log.info("%s: failed: %s", job.path, result.message)
+    return result
+
+
+def _guarded(
+    job: InputJob, settings: Settings, out_dir: Path, progress: Progress | None
+) -> InputResult:
+    """The failure boundary of one input: every exception becomes its failure."""
     try:
         _check_paths(job, out_dir)
         with open_source(job.path, settings.frames_fps) as source:
@@ -124,7 +140,7 @@ class _FrameWriters:
         self.detections.flush()
         if self.masks_dir is not None:
             mask = result.input_mask(self.info.width, self.info.height)
-            write_png(self.masks_dir / f"{result.index:06d}.png", mask)
+            write_image(self.masks_dir / f"{result.index:06d}.png", mask)
         if self.sink is not None:
             self.sink.write(annotate(to_display(frame.image), result, self.size))
         return record
@@ -144,13 +160,18 @@ def _detect_frames(
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections = EventTimeline(), 0
     for frame in source:
+        before, past = settings.in_range(frame.index, frame.time_s)
+        if past:
+            break
+        if before:
+            continue
         result = detector.process(frame.image, frame.index, frame.time_s)
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])
         timeline.add(
             result.time_s, result.score, result.moving_fraction,
-            record["observer_motion"]["class"], record["detections"],
+            record["observer_motion"]["class"], record["detections"], result.index,
         )  # fmt: skip
         if progress is not None:
             progress(len(timeline), info.frame_count)
@@ -179,14 +200,15 @@ def _process(
     elapsed = time.perf_counter() - started
     if len(timeline) == 0:
         raise InputError(f"{job.path}: no frames could be decoded")
-    rules = EventRules(settings.min_event_frames, settings.merge_gap_frames, settings.pad_frames)
-    events = timeline.events(rules, source.info.fps)
+    events = timeline.events(settings.event_rules(source.info.fps), source.info.fps)
     with atomic_text(out_dir / "events.csv") as fp:
         write_events_csv(fp, events)
     if settings.timeline:
-        write_png(out_dir / "timeline.png", draw_timeline(timeline, events))
+        write_image(out_dir / "timeline.png", draw_timeline(timeline, events))
     if settings.extract_clips and events:
         extract_clips(job.path, out_dir / "events", events, settings)
+    if settings.thumbnails and events:
+        write_thumbnails(job.path, out_dir, events, settings)
     if source.partial:
         log.warning(
             "%s: input is truncated or damaged; processed %d frames", job.path, len(timeline)
@@ -205,42 +227,3 @@ def _process(
     with atomic_text(out_dir / "summary.json") as fp:
         write_json(fp, summary)
     return summary
-
-
-def _annotated_result(detector: MotionDetector | None, frame: SourceFrame):
-    return detector.process(frame.image, frame.index, frame.time_s) if detector else None
-
-
-def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Settings) -> list[Path]:
-    """Cut one clip per event (padding included) from the input frames.
-
-    A second streaming pass over the input; with ``clips_annotated`` the
-    frames are annotated (the detector is re-run, which costs one more pass
-    of detection but keeps memory flat).
-    """
-    clip_dir.mkdir(parents=True, exist_ok=True)
-    written: list[Path] = []
-    pending = list(events)
-    sink: VideoSink | None = None
-    with open_source(path, settings.frames_fps) as source:
-        info = source.info
-        size = (info.width - info.width % 2, info.height - info.height % 2)
-        detector = make_detector(settings, source) if settings.clips_annotated else None
-        for frame in source:
-            result = _annotated_result(detector, frame)
-            if not pending:
-                break
-            ev = pending[0]
-            if frame.index == ev["start_frame"]:
-                sink = VideoSink(clip_dir / f"event_{ev['event']:04d}.mp4", info.fps, size)
-            if sink is not None:
-                image = to_display(frame.image)[: size[1], : size[0]]
-                sink.write(image if result is None else annotate(image, result, size))
-            if frame.index == ev["end_frame"] and sink is not None:
-                sink.close()
-                written.append(sink.path)
-                sink, _ = None, pending.pop(0)
-    if sink is not None:
-        sink.close()
-        written.append(sink.path)
-    return written

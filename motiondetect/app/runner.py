@@ -110,6 +110,12 @@ def run(
 
 def _write_batch_events(output: Path, results: list[InputResult]) -> None:
     """One events.csv at the top level listing every input's events."""
+    with atomic_text(output / "events.csv") as fp:
+        write_events_csv(fp, batch_events(output, results), with_input=True)
+
+
+def batch_events(output: Path, results: list[InputResult]) -> list[dict]:
+    """Every input's events (finished now or before), each with its ``input``."""
     rows = []
     for result in results:
         summary = result.summary
@@ -120,5 +126,4 @@ def _write_batch_events(output: Path, results: list[InputResult]) -> None:
             except (OSError, ValueError):
                 summary = {}
         rows.extend({**ev, "input": str(result.job.path)} for ev in summary.get("events", []))
-    with atomic_text(output / "events.csv") as fp:
-        write_events_csv(fp, rows, with_input=True)
+    return rows

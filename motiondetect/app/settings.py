@@ -27,9 +27,11 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 from motiondetect.animate.normal_footprints import AnimateConfig
 from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
+from motiondetect.app.times import TimeSpec, parse_time
 from motiondetect.constraint_ray.camera_fit import FitConfig
 from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
+from motiondetect.detection.events import EventRules
 from motiondetect.detection.objects import TrackConfig
 from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.normal_flow import StageConfig
@@ -73,10 +75,16 @@ RUN_DEFAULTS: dict[str, object] = {
     "jobs": 1,
     "overwrite": False,
     "recursive": False,
-    "frames_fps": 30.0,
+    "frames_fps": None,  # None: the video module's assumed rate, marked "assumed"
     "min_event_frames": 3,
     "merge_gap_frames": 5,
     "pad_frames": 5,
+    "min_event": None,  # a time (docs/cli.md); replaces min_event_frames when given
+    "merge_gap": None,
+    "pad": None,
+    "start": None,
+    "end": None,
+    "thumbnails": False,
     "extract_clips": False,
     "clips_annotated": False,
     "roi": (),
@@ -100,7 +108,8 @@ RUN_CHECKS: dict[str, tuple] = {
     "min_area": (int, 0, None),
 }
 _FLAGS = ("masks", "video", "overwrite", "recursive", "extract_clips", "clips_annotated")
-_FLAGS += ("timeline",)
+_FLAGS += ("timeline", "thumbnails")
+_TIMES = ("min_event", "merge_gap", "pad", "start", "end")
 
 
 class SettingsError(ValueError):
@@ -146,10 +155,16 @@ class Settings:
     jobs: int
     overwrite: bool
     recursive: bool
-    frames_fps: float
+    frames_fps: float | None
     min_event_frames: int
     merge_gap_frames: int
     pad_frames: int
+    min_event: TimeSpec | None
+    merge_gap: TimeSpec | None
+    pad: TimeSpec | None
+    start: TimeSpec | None
+    end: TimeSpec | None
+    thumbnails: bool
     extract_clips: bool
     clips_annotated: bool
     roi: tuple
@@ -162,6 +177,24 @@ class Settings:
     def persistence(self) -> int:
         return self.configs["track"].persistence
 
+    def event_rules(self, fps: float) -> EventRules:
+        """Event rules in frames, with any time given converted at ``fps``."""
+
+        def frames(spec: TimeSpec | None, fallback: int) -> int:
+            return fallback if spec is None else spec.frames(fps)
+
+        return EventRules(
+            max(1, frames(self.min_event, self.min_event_frames)),
+            frames(self.merge_gap, self.merge_gap_frames),
+            frames(self.pad, self.pad_frames),
+        )
+
+    def in_range(self, index: int, time_s: float) -> tuple[bool, bool]:
+        """(before the start, past the end) for a frame."""
+        before = self.start is not None and not self.start.reached(index, time_s)
+        past = self.end is not None and self.end.passed(index, time_s)
+        return before, past
+
     def detector_configs(self) -> tuple:
         """Every config the detector takes."""
         return tuple(self.configs.values())
@@ -172,7 +205,7 @@ class Settings:
             value = getattr(self, f.name)
             if f.name == "configs":
                 value = {k: dataclasses.asdict(v) for k, v in value.items()}
-            elif isinstance(value, Path):
+            elif isinstance(value, (Path, TimeSpec)):
                 value = str(value)
             elif isinstance(value, tuple):
                 value = [list(v) if isinstance(v, tuple) else v for v in value]
@@ -273,6 +306,15 @@ def make_settings(values: dict) -> Settings:
     for key in ("egomotion", "roi_file"):
         if run[key] is not None:
             run[key] = Path(run[key])
+    for key in _TIMES:
+        if run[key] is not None:
+            try:
+                run[key] = parse_time(run[key], f"--{key.replace('_', '-')}")
+            except ValueError as exc:
+                raise SettingsError(str(exc)) from None
+    start, end = run["start"], run["end"]
+    if start and end and start.unit == end.unit and end.value <= start.value:
+        raise SettingsError(f"--end ({end}) must come after --start ({start})")
     rois = run["roi"]
     run["roi"] = tuple(parse_roi(r) for r in ((rois,) if isinstance(rois, str) else rois))
     configs = _build_configs(given, run["measure"], run["work_size"])

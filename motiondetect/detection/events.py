@@ -66,10 +66,14 @@ class EventTimeline:
         self.classes: list[int] = []
         self.detectors: list[frozenset] = []
         self.boxes: list[tuple[int, int, int, int] | None] = []
+        self.indices: list[int] = []  # source frame index of each entry
 
     def add(
-        self, time_s: float, score: float, fraction: float, class_id: int, detections: list[dict]
-    ) -> None:
+        self, time_s: float, score: float, fraction: float, class_id: int, detections: list[dict],
+        index: int | None = None,
+    ) -> None:  # fmt: skip
+        """One frame; ``index`` is its source frame index (default: its position)."""
+        self.indices.append(len(self.indices) if index is None else index)
         self.times.append(time_s)
         self.scores.append(score)
         self.fractions.append(fraction)
@@ -97,17 +101,19 @@ class EventTimeline:
             start_s = self.times[a]
             end_s = self.times[b] + 1.0 / fps
             found = sorted(set().union(*self.detectors[a : b + 1]))
+            peak = a + int(np.argmax(self.scores[a : b + 1]))
             out.append(
                 {
                     "event": k,
-                    "start_frame": a,
-                    "end_frame": b,
+                    "start_frame": self.indices[a],
+                    "end_frame": self.indices[b],
+                    "peak_frame": self.indices[peak],
                     "start_s": round(start_s, 4),
                     "end_s": round(end_s, 4),
                     "start_timecode": timecode(start_s),
                     "end_timecode": timecode(end_s),
                     "duration_s": round(end_s - start_s, 4),
-                    "peak_score": round(max(self.scores[a : b + 1]), 4),
+                    "peak_score": round(self.scores[peak], 4),
                     "detectors": found,
                     "bbox": [x0, y0, x1 - x0, y1 - y0],
                 }

@@ -34,19 +34,29 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         tint = out.copy()
         tint[overlay > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
-    for region in result.regions:
-        x, y, w, h = region.bbox
-        colour = DETECTOR_COLOURS.get(tuple(region.detectors), (0, 255, 255))
-        p0 = (int(x * sx), int(y * sy))
-        p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
-        cv2.rectangle(out, p0, p1, colour, 2)
-        label = f"#{region.track} " if region.track is not None else ""
-        _text(out, f"{label}{region.score:.2f}", (p0[0] + 2, p0[1] + 14), colour)
+    draw_boxes(out, [r.to_json() for r in result.regions], sx, sy)
     _draw_coarse(out, result)
     if not result.reliable:
         cv2.rectangle(out, (0, 0), (out.shape[1] - 1, out.shape[0] - 1), (0, 200, 255), 4)
     _draw_label(out, result)
     _draw_legend(out)
+    return out
+
+
+def draw_boxes(
+    out: np.ndarray, detections: list[dict], sx: float = 1.0, sy: float = 1.0
+) -> np.ndarray:
+    """Draw detection records (as in frames.jsonl) on ``out`` in place: a box
+    coloured by detector, the track id and the score; ``sx, sy`` scale the
+    input-pixel boxes to ``out``."""
+    for det in detections:
+        x, y, w, h = det["bbox"]
+        colour = DETECTOR_COLOURS.get(tuple(det["detectors"]), (0, 255, 255))
+        p0 = (int(x * sx), int(y * sy))
+        p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
+        cv2.rectangle(out, p0, p1, colour, 2)
+        label = f"#{det['track']} " if "track" in det else ""
+        _text(out, f"{label}{det['score']:.2f}", (p0[0] + 2, p0[1] + 14), colour)
     return out
 
 

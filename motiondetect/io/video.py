@@ -69,6 +69,7 @@ class VideoInfo:
     frame_count: int  # as the container states it; 0 when unknown
     codec: str
     rotation_deg: int = 0
+    fps_source: str = "container"  # "container", "given" (--frames-fps) or "assumed"
 
     @property
     def duration_s(self) -> float:
@@ -154,13 +155,14 @@ class _VideoFileSource(FrameSource):
         h, w = first.shape[:2]
         _check_size(w, h, path)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        fps_source = "container"
         if not np.isfinite(fps) or fps <= 0 or fps > 1000:
-            fps = DEFAULT_FRAMES_FPS
+            fps, fps_source = DEFAULT_FRAMES_FPS, "assumed"
         fourcc = int(cap.get(cv2.CAP_PROP_FOURCC) or 0)
         codec = "".join(chr((fourcc >> 8 * i) & 0xFF) for i in range(4)).strip("\x00 ") or "?"
         rotation = int(cap.get(cv2.CAP_PROP_ORIENTATION_META) or 0)
         count = max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
-        self.info = VideoInfo(str(path), "video", w, h, fps, count, codec, rotation)
+        self.info = VideoInfo(str(path), "video", w, h, fps, count, codec, rotation, fps_source)
         self._cap = cap
         self._first = (first, self._time(cap, 0, fps))
         self.partial = False
@@ -197,7 +199,9 @@ class _VideoFileSource(FrameSource):
 
 
 class _FramesFolderSource(FrameSource):
-    def __init__(self, path: Path, fps: float) -> None:
+    def __init__(self, path: Path, fps: float | None) -> None:
+        fps_source = "assumed" if fps is None else "given"
+        fps = DEFAULT_FRAMES_FPS if fps is None else fps
         files, stray = [], []
         for entry in path.iterdir():
             if entry.is_file() and entry.suffix.lower() in IMAGE_EXTENSIONS:
@@ -217,7 +221,9 @@ class _FramesFolderSource(FrameSource):
         h, w = first.shape[:2]
         _check_size(w, h, path)
         self._files, self._numbers, self._first = files, numbers, first
-        self.info = VideoInfo(str(path), "frames", w, h, fps, len(files), "image-sequence")
+        self.info = VideoInfo(
+            str(path), "frames", w, h, fps, len(files), "image-sequence", 0, fps_source
+        )
         self.partial = False
 
     @staticmethod
@@ -244,7 +250,7 @@ class _FramesFolderSource(FrameSource):
         return list(self._numbers)
 
 
-def open_source(path: str | Path, frames_fps: float = DEFAULT_FRAMES_FPS) -> FrameSource:
+def open_source(path: str | Path, frames_fps: float | None = None) -> FrameSource:
     """Open a video file or a frames folder; raise :class:`VideoError` if it cannot be read."""
     path = Path(path)
     if not path.exists():
@@ -335,9 +341,9 @@ def to_display(image: np.ndarray) -> np.ndarray:
     return image
 
 
-def write_png(path: Path, image: np.ndarray) -> None:
-    """Write a PNG atomically (unicode-safe)."""
-    ok, buf = cv2.imencode(".png", image)
+def write_image(path: Path, image: np.ndarray) -> None:
+    """Write a PNG or JPEG (by the path's suffix) atomically (unicode-safe)."""
+    ok, buf = cv2.imencode(path.suffix.lower() or ".png", image)
     if not ok:
         raise OSError(f"cannot encode {path}")
     with atomic_path(path) as tmp:

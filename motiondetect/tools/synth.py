@@ -197,7 +197,7 @@ def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4
 
     from motiondetect.constraint_ray.egomotion import write_egomotion
     from motiondetect.io.report import atomic_text
-    from motiondetect.io.video import VideoSink, write_png
+    from motiondetect.io.video import VideoSink, write_image
 
     out = Path(out_dir)
     gt_dir = out / "truth"
@@ -206,7 +206,7 @@ def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4
     with VideoSink(out / video_name, config.fps, (config.width, config.height)) as sink:
         for frame in render_frames(config):
             sink.write(frame.image)
-            write_png(gt_dir / f"{frame.index:06d}.png", frame.mask)
+            write_image(gt_dir / f"{frame.index:06d}.png", frame.mask)
             poses.append(frame.camera_to_world)
             nearest = min(nearest, frame.nearest_rigid_m)
             movers.append({str(k): v for k, v in frame.visible.items()})
