@@ -37,9 +37,18 @@ def _setup_logging(verbose: bool, quiet: bool, logfile=None) -> None:
             raise click.UsageError(message) from None
         to_file.setFormatter(logging.Formatter("%(asctime)s %(levelname)s: %(message)s"))
         handlers.append(to_file)
+    close_log_files()
     log.handlers[:] = handlers
     log.setLevel(logging.DEBUG if logfile is not None else level)
     log.propagate = False
+
+
+def close_log_files() -> None:
+    """Close and drop the handlers that write to files (--logfile)."""
+    for handler in list(log.handlers):
+        if isinstance(handler, logging.FileHandler):
+            handler.close()
+            log.removeHandler(handler)
 
 
 def _fail(message: str, code: int = 1) -> None:

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 import click
-from motiondetect_cli.common import _fail, _guard, _setup_logging
+from motiondetect_cli.common import _fail, _guard, _setup_logging, close_log_files
 from tqdm import tqdm
 
 from motiondetect.app.settings import (
@@ -171,10 +171,17 @@ def _d(key: str) -> str:
 @click.option("-v", "--verbose", is_flag=True, help="Debug logging and tracebacks.")
 def detect(inputs, config_file, quiet, verbose, logfile, print_events, **options) -> None:
     """Detect independent motion in videos, frame folders or directories of videos."""
+    _setup_logging(verbose, quiet, logfile)
+    try:
+        _detect(inputs, config_file, quiet, verbose, print_events, options)
+    finally:
+        close_log_files()
+
+
+def _detect(inputs, config_file, quiet, verbose, print_events, options: dict) -> None:
     from motiondetect.app.runner import InputError, batch_events, run
     from motiondetect.io.report import write_events_csv
 
-    _setup_logging(verbose, quiet, logfile)
     with _guard(verbose):
         try:
             values = load_config_file(config_file) if config_file else {}

@@ -12,7 +12,7 @@ from motiondetect.tools.evaluate import Counts, score_frame
 from motiondetect.tools.synth import CAMERA_CLASS, SynthConfig, render_frames
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=16)
 def scene(
     camera: str, movers: tuple[str, ...] = (), frames: int = 24, supersample: int = 1, **kw
 ) -> tuple:
