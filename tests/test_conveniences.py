@@ -122,3 +122,12 @@ def test_info_marks_an_assumed_frame_rate(tmp_path):
         cv2.imwrite(str(folder / f"{i}.png"), np.full((80, 80), 40 * i, np.uint8))
     assert "(assumed)" in run("info", folder).stdout
     assert "(assumed)" not in run("info", SAMPLE).stdout
+
+
+def test_evaluate_help_explains_every_column():
+    from motiondetect.tools.evaluate import format_table
+
+    heads = format_table([]).split()
+    text = run("evaluate", "--help").stdout
+    for head in heads[1:]:  # every column the table prints, "sequence" aside
+        assert f"\n  {head} " in text, head
