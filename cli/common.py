@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import os
 import sys
 
 import click
@@ -25,6 +26,8 @@ def _setup_logging(verbose: bool, quiet: bool, logfile=None) -> None:
     """stderr at WARNING (ERROR with -q, DEBUG with -v); ``logfile`` gets
     everything, DEBUG included, with timestamps."""
     level = logging.DEBUG if verbose else (logging.ERROR if quiet else logging.WARNING)
+    if verbose:  # FFmpeg's warnings too (read when the first video is opened)
+        os.environ["OPENCV_FFMPEG_LOGLEVEL"] = "24"
     handler = _BarSafeHandler()
     handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
     handler.setLevel(level)
@@ -71,6 +74,10 @@ def _guard(verbose: bool):
             if issubclass(exc_type, KeyboardInterrupt):
                 click.echo("interrupted", err=True)
                 sys.exit(130)
+            code = getattr(exc, "code", None)
+            if type(exc).__name__ == "Interrupted" and code in (130, 143):
+                click.echo(f"{exc}; unfinished inputs are redone on the next run", err=True)
+                sys.exit(code)
             if verbose:
                 return False
             click.echo(f"error: {exc}", err=True)

@@ -91,6 +91,18 @@ def _d(key: str) -> str:
     help="Descend into sub-folders of a batch directory.",
 )
 @click.option(
+    "--include",
+    multiple=True,
+    metavar="GLOB",
+    help="Only inputs whose path in a scanned folder matches (repeatable): '*.mp4'.",
+)
+@click.option(
+    "--exclude",
+    multiple=True,
+    metavar="GLOB",
+    help="Skip paths in a scanned folder that match (repeatable): 'Annotations'.",
+)
+@click.option(
     "--frames-fps",
     type=float,
     help="Frame rate of image-sequence inputs (default: 30, reported as assumed).",

@@ -268,8 +268,9 @@ def test_batch_with_bad_files(tmp_path, clip_frames):
     out = tmp_path / "out"
     result = invoke("detect", batch, "-o", out, "--recursive", "--jobs", "2")
     assert result.exit_code == 1
-    assert "2 of 5 inputs failed" in result.output
-    assert "corrupt.mp4" in result.output and "notes.txt" in result.output
+    assert "1 of 4 inputs failed" in result.output  # a non-video file is no input...
+    assert "corrupt.mp4" in result.output
+    assert "skipped 1 files that are not videos (e.g. notes.txt)" in result.output  # ...but said
     assert "Traceback" not in result.output
     for name in ("a", "b", "sub/c"):
         check_outputs(out / name, 10)

@@ -157,5 +157,5 @@ def test_batch_input_order_and_names_are_stable(tmp_path, frames):
     for name in ("b.mp4", "a.mp4", "a.avi"):
         write_video(tmp_path / name, frames[:3], "MJPG" if name.endswith("avi") else "mp4v")
     jobs = runner.discover_inputs([tmp_path], recursive=False)
-    assert [j.name for j in jobs] == ["a", "a-1", "b"]
+    assert [j.name for j in jobs] == ["a.avi", "a.mp4", "b"]  # shared stems keep the suffix
     assert [Path(j.path).name for j in jobs] == ["a.avi", "a.mp4", "b.mp4"]

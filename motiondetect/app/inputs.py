@@ -8,11 +8,15 @@ relative to the batch directory (or is the input's stem).
 
 from __future__ import annotations
 
+import hashlib
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from motiondetect.io.video import IMAGE_EXTENSIONS, is_frames_folder
+from motiondetect.io.video import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, is_frames_folder
+
+log = logging.getLogger("motiondetect")
 
 Progress = Callable[[int, int], None]  # (frames done, frames expected)
 
@@ -35,52 +39,137 @@ class InputResult:
     summary: dict = field(default_factory=dict)
 
 
-def discover_inputs(paths: list[Path], recursive: bool) -> list[InputJob]:
-    """Expand INPUT arguments into jobs (see docs/cli.md for the rule)."""
+def discover_inputs(
+    paths: list[Path],
+    recursive: bool,
+    *,
+    output: Path | None = None,
+    include: tuple[str, ...] = (),
+    exclude: tuple[str, ...] = (),
+) -> list[InputJob]:
+    """Expand INPUT arguments into jobs (docs/cli.md states the rule).
+
+    Each argument is an input, except a directory that is not a frames
+    folder: it is scanned for videos (and, with ``recursive``, sub-folders
+    and frames folders). A scan visits each real path once (symlink loops
+    end), never enters ``output`` or a folder holding the tool's own outputs,
+    honours ``include``/``exclude`` globs on the path relative to the scanned
+    directory (``*.mp4``, ``Annotations``), and skips files that are not
+    videos with one warning line. Names are unique by construction
+    (:func:`unique_names`).
+    """
+    scanner = _Scanner(recursive, output, include, exclude)
     jobs: list[InputJob] = []
     for path in paths:
         if path.is_dir() and not is_frames_folder(path):
-            found = _scan_directory(path, recursive)
+            found = scanner.scan(path)
             if not found:
                 jobs.append(InputJob(path, path.name))  # fails later with a clear message
             jobs.extend(found)
         else:
             name = path.name if path.is_dir() else path.stem
             jobs.append(InputJob(path, name or "input"))
-    return _unique_names(jobs)
+    scanner.report()
+    return unique_names(jobs)
 
 
-def _scan_directory(root: Path, recursive: bool) -> list[InputJob]:
-    """Videos in ``root``; with ``recursive``, also in sub-folders, and each
-    frames folder found below ``root`` as one input (not descended into).
-    Loose images are skipped; other files become inputs that fail with a
-    clear "not a video" line, so nothing is skipped silently."""
-    jobs = []
-    for entry in sorted(root.iterdir()):
-        if entry.name.startswith("."):
-            continue
-        rel = entry.relative_to(root)
-        if entry.is_dir():
-            if recursive and is_frames_folder(entry):
-                jobs.append(InputJob(entry, str(rel)))
-            elif recursive:
-                jobs.extend(
-                    InputJob(j.path, str(rel / j.name)) for j in _scan_directory(entry, recursive)
-                )
-        elif entry.suffix.lower() not in IMAGE_EXTENSIONS:
-            jobs.append(InputJob(entry, str(rel.with_suffix(""))))
-    return jobs
+def is_output_folder(path: Path) -> bool:
+    """A folder this tool wrote for one input."""
+    return (path / "summary.json").is_file() or (path / "frames.jsonl").is_file()
 
 
-def _unique_names(jobs: list[InputJob]) -> list[InputJob]:
-    seen: dict[str, int] = {}
+class _Scanner:
+    def __init__(self, recursive, output, include, exclude) -> None:
+        self.recursive, self.include, self.exclude = recursive, include, exclude
+        self.output = output.resolve() if output is not None else None
+        self.seen: set[Path] = set()
+        self.ignored: list[str] = []
+
+    def _wanted(self, rel: Path, is_input: bool) -> bool:
+        if any(rel.match(p) for p in self.exclude):
+            return False
+        return not (is_input and self.include) or any(rel.match(p) for p in self.include)
+
+    def _first_visit(self, path: Path) -> bool:
+        real = path.resolve()
+        if real in self.seen or real == self.output:
+            return False
+        self.seen.add(real)
+        return True
+
+    def scan(self, root: Path, prefix: Path = Path()) -> list[InputJob]:
+        jobs: list[InputJob] = []
+        if not self._first_visit(root):
+            return jobs
+        for entry in sorted(root.iterdir()):
+            rel = prefix / entry.name
+            if entry.name.startswith(".") or not self._wanted(rel, is_input=False):
+                continue
+            if entry.is_dir():
+                if not self.recursive or is_output_folder(entry):
+                    continue
+                if is_frames_folder(entry):
+                    if self._wanted(rel, True) and self._first_visit(entry):
+                        jobs.append(InputJob(entry, str(rel)))
+                else:
+                    jobs.extend(self.scan(entry, rel))
+            elif entry.suffix.lower() in VIDEO_EXTENSIONS:
+                if self._wanted(rel, True) and self._first_visit(entry):
+                    jobs.append(InputJob(entry, str(rel.with_suffix(""))))
+            elif entry.suffix.lower() not in IMAGE_EXTENSIONS:
+                self.ignored.append(str(rel))
+        return jobs
+
+    def report(self) -> None:
+        if self.ignored:
+            log.warning(
+                "skipped %d files that are not videos (e.g. %s)", len(self.ignored), self.ignored[0]
+            )
+
+
+def unique_names(jobs: list[InputJob]) -> list[InputJob]:
+    """Output names, unique by construction and the same on every run.
+
+    A name shared by several inputs becomes each one's file name with its
+    extension (``a.mp4``, ``a.avi``); a name still taken then gets the
+    smallest free ``-N`` suffix, checked against every name in the batch.
+    """
+    counts: dict[str, int] = {}
+    for job in jobs:
+        counts[job.name] = counts.get(job.name, 0) + 1
+    taken: set[str] = set()
     out = []
     for job in jobs:
         name = job.name
-        if name in seen:
-            seen[name] += 1
-            name = f"{name}-{seen[name]}"
-        else:
-            seen[name] = 0
+        if counts[name] > 1 and job.path.suffix:
+            name = str(Path(name).with_name(job.path.name))
+        base, n = name, 2
+        while name in taken:
+            name, n = f"{base}-{n}", n + 1
+        taken.add(name)
         out.append(InputJob(job.path, name))
     return out
+
+
+def input_identity(path: Path) -> dict:
+    """What makes an input the same input on a re-run: its real path, size,
+    modification time and a hash of its first MiB (of its file list, for a
+    frames folder)."""
+    real = path.resolve()
+    stat = real.stat()
+    digest = hashlib.sha256()
+    if real.is_dir():
+        entries = sorted(real.iterdir())
+        for entry in entries:
+            digest.update(f"{entry.name}:{entry.stat().st_size}\n".encode())
+        size = len(entries)
+    else:
+        with open(real, "rb") as fp:
+            digest.update(fp.read(1 << 20))
+        size = stat.st_size
+    return {
+        "path": str(real),
+        "size": size,
+        "mtime_ns": stat.st_mtime_ns,
+        "head_sha256": digest.hexdigest()[:32],
+    }

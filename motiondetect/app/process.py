@@ -8,13 +8,14 @@ input: whatever goes wrong becomes that input's one-line failure.
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import shutil
 import time
 from pathlib import Path
 
 from motiondetect.app.clips import extract_clips, write_thumbnails
-from motiondetect.app.inputs import InputError, InputJob, InputResult, Progress
+from motiondetect.app.inputs import InputError, InputJob, InputResult, Progress, input_identity
 from motiondetect.app.roi import keep_detections, roi_mask
 from motiondetect.app.settings import Settings
 from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
@@ -75,8 +76,10 @@ def process_input(
     """Detect motion in one input and write its outputs. Never raises for bad input."""
     out_dir = settings.output / job.name
     if (out_dir / "summary.json").exists() and not settings.overwrite:
-        log.info("%s: skipped, already finished", job.path)
-        return InputResult(job, "skipped", "already finished (use --overwrite to redo)")
+        finished = _finished(job, out_dir, settings)
+        if finished is not None:
+            log.info("%s: %s", job.path, finished.message)
+            return finished
     log.info("%s: processing into %s", job.path, out_dir)
     result = _guarded(job, settings, out_dir, progress)
     if result.status == "done":
@@ -85,6 +88,27 @@ def process_input(
     else:
         log.info("%s: failed: %s", job.path, result.message)
     return result
+
+
+def _finished(job: InputJob, out_dir: Path, settings: Settings) -> InputResult | None:
+    """The result of a finished earlier run into ``out_dir``, or None to (re)do it."""
+    try:
+        done = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))
+        identity, previous = input_identity(job.path), done["input"].get("identity")
+    except (OSError, ValueError, KeyError, TypeError):
+        return None  # unreadable: redo it
+    if previous != identity:
+        other = (previous or {}).get("path", done["input"].get("path"))
+        return InputResult(
+            job, "failed",
+            f"{job.path}: {out_dir} holds the results of another input ({other}); "
+            "use another --output or --overwrite",
+        )  # fmt: skip
+    if done.get("settings_hash") != settings.result_hash():
+        return InputResult(
+            job, "skipped", "finished with other settings (use --overwrite to redo it)"
+        )
+    return InputResult(job, "skipped", "already finished (use --overwrite to redo)")
 
 
 def _guarded(
@@ -224,6 +248,8 @@ def _process(
     summary = summary_record(
         str(job.path), source.info, status, settings.to_json(), totals, elapsed, events, outputs
     )
+    summary["input"]["identity"] = input_identity(job.path)
+    summary["settings_hash"] = settings.result_hash()
     with atomic_text(out_dir / "summary.json") as fp:
         write_json(fp, summary)
     return summary

@@ -8,9 +8,13 @@ the others. A batch of more than one input also gets a top-level
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import multiprocessing
 import os
+import signal
+import threading
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -29,7 +33,17 @@ from motiondetect.app.process import process_input
 from motiondetect.app.settings import Settings
 from motiondetect.io.report import atomic_text, write_events_csv
 
-__all__ = ["InputError", "InputJob", "InputResult", "RunResult", "discover_inputs", "run"]
+LOCK_NAME = ".motiondetect.lock"
+
+__all__ = [
+    "Interrupted",
+    "InputError",
+    "InputJob",
+    "InputResult",
+    "RunResult",
+    "discover_inputs",
+    "run",
+]
 
 
 @dataclass
@@ -45,9 +59,90 @@ class RunResult:
         return 1 if self.failed else 0
 
 
-def _worker(job: InputJob, settings: Settings) -> InputResult:
+class Interrupted(BaseException):
+    """SIGINT or SIGTERM stopped the batch; ``code`` is the exit code (130, 143).
+
+    A BaseException, like KeyboardInterrupt, so that no input's failure
+    boundary mistakes it for that input's failure: the input in progress is
+    left unfinished and is redone on the next run.
+    """
+
+    def __init__(self, code: int) -> None:
+        super().__init__(f"interrupted by {'SIGTERM' if code == 143 else 'SIGINT'}")
+        self.code = code
+
+
+@contextlib.contextmanager
+def _stopping_on_signals():
+    """SIGTERM (and SIGINT) raise :class:`Interrupted` in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def stop(signum, frame):
+        raise Interrupted(143 if signum == signal.SIGTERM else 130)
+
+    saved = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        yield
+    finally:
+        for s, handler in saved.items():
+            signal.signal(s, handler)
+
+
+@contextlib.contextmanager
+def output_lock(output: Path):
+    """Hold the output folder for this run; a second run into it refuses."""
+    try:
+        output.mkdir(parents=True, exist_ok=True)
+        fp = open(output / LOCK_NAME, "a+")
+    except OSError as exc:
+        raise InputError(f"output folder {output} is not writable: {exc.strerror or exc}") from exc
+    with fp:
+        try:
+            fcntl.flock(fp, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise InputError(
+                f"output folder {output} is in use by another motiondetect run"
+            ) from None
+        try:
+            yield
+        finally:
+            fcntl.flock(fp, fcntl.LOCK_UN)
+
+
+def _worker_init() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     cv2.setNumThreads(1)
-    return process_input(job, settings)
+
+
+def _run_pool(jobs: list[InputJob], settings: Settings, finish) -> None:
+    """``jobs`` in worker processes; a signal cancels the queue and ends the workers."""
+    # spawn, not fork: forking after OpenCV's thread pool started can deadlock.
+    # One thread per worker process: the parallelism is across inputs.
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(settings.jobs, mp_context=context, initializer=_worker_init)
+    try:
+        futures = {pool.submit(process_input, job, settings): job for job in jobs}
+        for future in as_completed(futures):
+            job = futures[future]
+            try:
+                finish(future.result())
+            except Exception as exc:  # a crashed worker: report, keep going
+                finish(InputResult(job, "failed", f"{job.path}: worker failed: {exc}"))
+    except BaseException:
+        workers = list(getattr(pool, "_processes", {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in workers:
+            process.terminate()
+        for process in workers:
+            process.join(timeout=2)
+            if process.is_alive():
+                process.kill()
+        raise
+    pool.shutdown()
 
 
 def run(
@@ -63,19 +158,14 @@ def run(
     ``on_start(job, expected_frames)`` may return a per-frame progress
     callback (used with one job at a time); ``on_done(result)`` is called as
     each input finishes; ``on_jobs(count)`` once the inputs are known.
+    SIGINT or SIGTERM raises :class:`Interrupted` once the workers are gone.
     """
-    jobs = discover_inputs(inputs, settings.recursive)
+    jobs = discover_inputs(
+        inputs, settings.recursive, output=settings.output,
+        include=settings.include, exclude=settings.exclude,
+    )  # fmt: skip
     if on_jobs is not None:
         on_jobs(len(jobs))
-    try:
-        settings.output.mkdir(parents=True, exist_ok=True)
-        probe = settings.output / f".motiondetect-write-test-{os.getpid()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as exc:
-        raise InputError(
-            f"output folder {settings.output} is not writable: {exc.strerror or exc}"
-        ) from exc
     results: list[InputResult] = []
 
     def finish(result: InputResult) -> None:
@@ -83,28 +173,16 @@ def run(
         if on_done is not None:
             on_done(result)
 
-    if settings.jobs <= 1 or len(jobs) <= 1:
-        for job in jobs:
-            progress = on_start(job, 0) if on_start else None
-            finish(process_input(job, settings, progress))
-    else:
-        # spawn, not fork: forking after OpenCV's thread pool started can deadlock.
-        # One thread per worker process: the parallelism is across inputs.
-        for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-            os.environ.setdefault(var, "1")
-        context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=settings.jobs, mp_context=context) as pool:
-            futures = {pool.submit(_worker, job, settings): job for job in jobs}
-            for future in as_completed(futures):
-                job = futures[future]
-                try:
-                    finish(future.result())
-                except Exception as exc:  # a crashed worker: report, keep going
-                    finish(InputResult(job, "failed", f"{job.path}: worker failed: {exc}"))
-    order = {job: i for i, job in enumerate(jobs)}
-    results.sort(key=lambda r: order.get(r.job, 0))
-    if len(jobs) > 1:
-        _write_batch_events(settings.output, results)
+    with output_lock(settings.output), _stopping_on_signals():
+        if settings.jobs <= 1 or len(jobs) <= 1:
+            for job in jobs:
+                finish(process_input(job, settings, on_start(job, 0) if on_start else None))
+        else:
+            _run_pool(jobs, settings, finish)
+        order = {job: i for i, job in enumerate(jobs)}
+        results.sort(key=lambda r: order.get(r.job, 0))
+        if len(jobs) > 1:
+            _write_batch_events(settings.output, results)
     return RunResult(results)
 
 

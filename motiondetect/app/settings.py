@@ -15,6 +15,8 @@ the same range checks and the same one-line messages.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
 import typing
 from dataclasses import dataclass
@@ -75,6 +77,8 @@ RUN_DEFAULTS: dict[str, object] = {
     "jobs": 1,
     "overwrite": False,
     "recursive": False,
+    "include": (),  # globs on paths relative to a scanned directory
+    "exclude": (),
     "frames_fps": None,  # None: the video module's assumed rate, marked "assumed"
     "min_event_frames": 3,
     "merge_gap_frames": 5,
@@ -155,6 +159,8 @@ class Settings:
     jobs: int
     overwrite: bool
     recursive: bool
+    include: tuple
+    exclude: tuple
     frames_fps: float | None
     min_event_frames: int
     merge_gap_frames: int
@@ -198,6 +204,13 @@ class Settings:
     def detector_configs(self) -> tuple:
         """Every config the detector takes."""
         return tuple(self.configs.values())
+
+    def result_hash(self) -> str:
+        """A hash of every setting that changes an input's outputs (not where
+        they go, how many jobs run, or which inputs a batch finds)."""
+        batch = {"output", "jobs", "overwrite", "recursive", "include", "exclude"}
+        doc = {k: v for k, v in self.to_json().items() if k not in batch}
+        return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:16]
 
     def to_json(self) -> dict:
         out = {}
@@ -315,6 +328,11 @@ def make_settings(values: dict) -> Settings:
     start, end = run["start"], run["end"]
     if start and end and start.unit == end.unit and end.value <= start.value:
         raise SettingsError(f"--end ({end}) must come after --start ({start})")
+    for key in ("include", "exclude"):
+        globs = (run[key],) if isinstance(run[key], str) else run[key]
+        if not all(isinstance(g, str) and g for g in globs):
+            raise SettingsError(f"--{key} takes glob patterns, but got {run[key]!r}")
+        run[key] = tuple(globs)
     rois = run["roi"]
     run["roi"] = tuple(parse_roi(r) for r in ((rois,) if isinstance(rois, str) else rois))
     configs = _build_configs(given, run["measure"], run["work_size"])

@@ -47,6 +47,11 @@ VIDEO_EXTENSIONS = {
 DEFAULT_FRAMES_FPS = 30.0
 MAX_FRAME_PIXELS = 16384 * 16384
 
+# FFmpeg's own log lines ("moov atom not found") are not this tool's messages:
+# OpenCV reads this when it opens its first capture. A value the user set wins;
+# the CLI's -v sets warnings (docs/robustness.md).
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
 try:  # keep FFmpeg's own chatter out of the user's terminal
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
 except AttributeError:  # pragma: no cover - older OpenCV
@@ -257,7 +262,11 @@ def open_source(path: str | Path, frames_fps: float | None = None) -> FrameSourc
         raise VideoError(f"{path}: no such file or directory")
     if path.is_dir():
         if not is_frames_folder(path):
-            raise VideoError(f"{path}: a directory, but not a frames folder (no images)")
+            images = sum(1 for e in path.iterdir() if e.suffix.lower() in IMAGE_EXTENSIONS)
+            raise VideoError(
+                f"{path}: a directory with {images} image{'s' if images != 1 else ''} and no "
+                "video; a frames folder needs at least 2 images"
+            )
         return _FramesFolderSource(path, frames_fps)
     try:
         return _VideoFileSource(path)
