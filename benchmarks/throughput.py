@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -129,78 +128,28 @@ def batch(tmp: Path, videos: int, frames: int) -> None:
     for i in range(videos):
         make_pan_clip(folder / f"v{i}.mp4", (512, 512), frames, speed_px=2.0 + 0.5 * i)
     times = {}
-    for jobs in (1, 2):
-        out = tmp / f"out{jobs}"
+    variants = {
+        "--jobs 1": ["--jobs", "1"],
+        "--jobs 2": ["--jobs", "2"],
+        "--scheduler local (2 workers)": ["--jobs", "2", "--scheduler", "local"],
+    }
+    for label, extra in variants.items():
+        out = tmp / label.split()[0].strip("-") / str(len(times))
         t = time.perf_counter()
         subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "motiondetect_cli.main",
-                "detect",
-                str(folder),
-                "-o",
-                str(out),
-                "-q",
-                "--jobs",
-                str(jobs),
-                "--no-video",
-            ],
+            [sys.executable, "-m", "motiondetect_cli.main", "detect", str(folder), "-o",
+             str(out), "-q", "--no-video", *extra],
             check=True,
-        )
-        times[jobs] = time.perf_counter() - t
-    print(f"\nbatch of {videos} videos x {frames} frames (512x512):")
-    print(
-        f"  --jobs 1: {times[1]:.2f} s   --jobs 2: {times[2]:.2f} s   "
-        f"speed-up {times[1] / times[2]:.2f}x"
-    )
-
-
-SHARED = HERE.parents[1] / "shared" / "data"
-
-
-def real_clips(tmp: Path) -> list[Path]:
-    """woman.mp4 and one 854x480 DAVIS clip (re-encoded to MPEG-4), when present."""
-    clips = []
-    if (SHARED / "woman" / "woman.mp4").exists():
-        clips.append(SHARED / "woman" / "woman.mp4")
-    frames = sorted((SHARED / "davis" / "dog" / "JPEGImages").glob("*.jpg"))
-    if frames:
-        first = cv2.imread(str(frames[0]))
-        h, w = first.shape[:2]
-        path = tmp / "davis_dog.mp4"
-        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (w, h))
-        for f in frames:
-            writer.write(cv2.imread(str(f)))
-        writer.release()
-        clips.append(path)
-    return clips
-
-
-def whole_process(cmd: list[str]) -> float:
-    t = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t
-
-
-def real(tmp: Path) -> None:
-    """Whole processes on real clips: detect vs MOG2 (default threads) vs dvr-scan -so."""
-    dvr = shutil.which("dvr-scan")
-    for clip in real_clips(tmp):
-        out = tmp / "real"
-        ours = whole_process(
-            [sys.executable, "-m", "motiondetect_cli.main", "detect", str(clip), "-o", str(out),
-             "-q", "--no-video", "--overwrite"]
         )  # fmt: skip
-        mog_code = f"import sys;sys.path.insert(0,{str(HERE)!r});from common import mog2_on;"
-        mog = whole_process([sys.executable, "-c", mog_code + f"mog2_on({str(clip)!r})"])
-        line = f"  {clip.name}: motiondetect {ours:.2f} s, MOG2 {mog:.2f} s ({mog / ours:.2f}x)"
-        if dvr:
-            scan = whole_process([dvr, "-i", str(clip), "-so", "-q"])
-            line += f", dvr-scan -so {scan:.2f} s ({scan / ours:.2f}x)"
-        else:
-            line += ", dvr-scan not installed"
-        print(line)
+        times[label] = time.perf_counter() - t
+    print(f"\nbatch of {videos} videos x {frames} frames (512x512):")
+    for label, seconds in times.items():
+        print(f"  {label:32s} {seconds:7.2f} s")
+    overhead = times["--scheduler local (2 workers)"] / times["--jobs 2"] - 1
+    print(
+        f"  Dask against --jobs 2: {100 * overhead:+.1f} % per batch "
+        f"({100 * overhead:+.1f} % per input)"
+    )
 
 
 def main() -> None:

@@ -80,6 +80,12 @@ def _d(key: str) -> str:
 )
 @click.option("-j", "--jobs", type=int, help="Inputs processed in parallel.")
 @click.option(
+    "--scheduler",
+    metavar="local|tcp://HOST:PORT",
+    help="Run the batch on Dask: a LocalCluster of --jobs workers, or an existing "
+    "scheduler (needs the dask extra; the output folder must be shared by every worker).",
+)
+@click.option(
     "--overwrite/--no-overwrite",
     default=None,
     help="Redo inputs already finished (default: skip them).",

@@ -145,6 +145,65 @@ def _run_pool(jobs: list[InputJob], settings: Settings, finish) -> None:
     pool.shutdown()
 
 
+def _dask_task(job: InputJob, settings: Settings) -> InputResult:
+    cv2.setNumThreads(1)  # one thread per worker process, as with --jobs
+    return process_input(job, settings)
+
+
+def _sees(path: str) -> bool:
+    return Path(path).is_file()
+
+
+def _dask_client(scheduler: str, workers: int):
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError(
+            "--scheduler needs the dask extra: pip install 'motiondetect[dask]'"
+        ) from None
+    if scheduler == "local":
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        return Client(cluster), cluster
+    try:
+        return Client(scheduler, timeout="10s"), None
+    except OSError as exc:
+        raise InputError(f"cannot reach the Dask scheduler {scheduler}: {exc}") from None
+
+
+def _run_dask(jobs: list[InputJob], settings: Settings, finish) -> None:
+    """One Dask task per input; each keeps process_input's failure boundary."""
+    from dask.distributed import as_completed as dask_completed
+
+    client, cluster = _dask_client(settings.scheduler, settings.jobs)
+    probe = settings.output / f".motiondetect-shared-{os.getpid()}"
+    try:
+        probe.write_text("")
+        blind = [w for w, ok in client.run(_sees, str(probe.resolve())).items() if not ok]
+        if blind:
+            raise InputError(
+                f"output folder {settings.output} is not visible to Dask worker {blind[0]}: "
+                "it must be on a filesystem every worker shares"
+            )
+        futures = {client.submit(_dask_task, job, settings, pure=False): job for job in jobs}
+        try:
+            for future in dask_completed(list(futures)):
+                job = futures[future]
+                try:
+                    finish(future.result())
+                except Exception as exc:  # a lost worker: report, keep going
+                    finish(InputResult(job, "failed", f"{job.path}: worker failed: {exc}"))
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+    finally:
+        probe.unlink(missing_ok=True)
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def run(
     inputs: list[Path],
     settings: Settings,
@@ -174,7 +233,9 @@ def run(
             on_done(result)
 
     with output_lock(settings.output), _stopping_on_signals():
-        if settings.jobs <= 1 or len(jobs) <= 1:
+        if settings.scheduler is not None:
+            _run_dask(jobs, settings, finish)
+        elif settings.jobs <= 1 or len(jobs) <= 1:
             for job in jobs:
                 finish(process_input(job, settings, on_start(job, 0) if on_start else None))
         else:

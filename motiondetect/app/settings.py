@@ -75,6 +75,7 @@ RUN_DEFAULTS: dict[str, object] = {
     "video_size": 512,
     "egomotion": None,
     "jobs": 1,
+    "scheduler": None,  # "local" or "tcp://HOST:PORT": run the batch on Dask
     "overwrite": False,
     "recursive": False,
     "include": (),  # globs on paths relative to a scanned directory
@@ -157,6 +158,7 @@ class Settings:
     video_size: int
     egomotion: Path | None
     jobs: int
+    scheduler: str | None
     overwrite: bool
     recursive: bool
     include: tuple
@@ -208,7 +210,7 @@ class Settings:
     def result_hash(self) -> str:
         """A hash of every setting that changes an input's outputs (not where
         they go, how many jobs run, or which inputs a batch finds)."""
-        batch = {"output", "jobs", "overwrite", "recursive", "include", "exclude"}
+        batch = {"output", "jobs", "scheduler", "overwrite", "recursive", "include", "exclude"}
         doc = {k: v for k, v in self.to_json().items() if k not in batch}
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:16]
 
@@ -333,6 +335,11 @@ def make_settings(values: dict) -> Settings:
         if not all(isinstance(g, str) and g for g in globs):
             raise SettingsError(f"--{key} takes glob patterns, but got {run[key]!r}")
         run[key] = tuple(globs)
+    scheduler = run["scheduler"]
+    if scheduler is not None and not (
+        scheduler == "local" or (isinstance(scheduler, str) and "://" in scheduler)
+    ):
+        raise SettingsError(f"--scheduler must be local or tcp://HOST:PORT, but got {scheduler!r}")
     rois = run["roi"]
     run["roi"] = tuple(parse_roi(r) for r in ((rois,) if isinstance(rois, str) else rois))
     configs = _build_configs(given, run["measure"], run["work_size"])
