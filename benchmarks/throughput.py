@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -150,6 +151,53 @@ def batch(tmp: Path, videos: int, frames: int) -> None:
         f"  Dask against --jobs 2: {100 * overhead:+.1f} % per batch "
         f"({100 * overhead:+.1f} % per input)"
     )
+
+
+SHARED = HERE.parents[1] / "shared" / "data"
+
+
+def real_clips(tmp: Path) -> list[Path]:
+    """woman.mp4 and one 854x480 DAVIS clip (re-encoded to MPEG-4), when present."""
+    clips = []
+    if (SHARED / "woman" / "woman.mp4").exists():
+        clips.append(SHARED / "woman" / "woman.mp4")
+    frames = sorted((SHARED / "davis" / "dog" / "JPEGImages").glob("*.jpg"))
+    if frames:
+        first = cv2.imread(str(frames[0]))
+        h, w = first.shape[:2]
+        path = tmp / "davis_dog.mp4"
+        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (w, h))
+        for f in frames:
+            writer.write(cv2.imread(str(f)))
+        writer.release()
+        clips.append(path)
+    return clips
+
+
+def whole_process(cmd: list[str]) -> float:
+    t = time.perf_counter()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - t
+
+
+def real(tmp: Path) -> None:
+    """Whole processes on real clips: detect vs MOG2 (default threads) vs dvr-scan -so."""
+    dvr = shutil.which("dvr-scan")
+    for clip in real_clips(tmp):
+        out = tmp / "real"
+        ours = whole_process(
+            [sys.executable, "-m", "motiondetect_cli.main", "detect", str(clip), "-o", str(out),
+             "-q", "--no-video", "--overwrite"]
+        )  # fmt: skip
+        mog_code = f"import sys;sys.path.insert(0,{str(HERE)!r});from common import mog2_on;"
+        mog = whole_process([sys.executable, "-c", mog_code + f"mog2_on({str(clip)!r})"])
+        line = f"  {clip.name}: motiondetect {ours:.2f} s, MOG2 {mog:.2f} s ({mog / ours:.2f}x)"
+        if dvr:
+            scan = whole_process([dvr, "-i", str(clip), "-so", "-q"])
+            line += f", dvr-scan -so {scan:.2f} s ({scan / ours:.2f}x)"
+        else:
+            line += ", dvr-scan not installed"
+        print(line)
 
 
 def main() -> None:
