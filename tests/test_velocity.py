@@ -186,3 +186,21 @@ def test_tracker_keeps_ids_and_needs_persistence():
     tracker.coast()  # an unreliable frame: tracks survive it
     fourth = tracker.update([_obj(20.0)])
     assert [o.track for o in fourth] == [1]
+
+
+def test_most_of_the_frame_off_the_fit_can_mark_a_frame_unreliable():
+    """With ``max_flagged_share`` set, a frame flagged nearly whole is not judged;
+    by default (off) the same frames are judged."""
+    from motiondetect.constraint_ray.camera_fit import FitConfig
+
+    other = cv2.resize(cv2.cvtColor(data.coffee(), cv2.COLOR_RGB2BGR), (W, H))
+    frames = [background(2.0 * t) for t in range(4)]
+    for t in range(5):  # a second picture sliding the other way across the whole view
+        frames.append(cv2.addWeighted(frames[3], 0.4, np.roll(other, 8 * t, axis=1), 0.6, 0))
+    reason = "most of the frame off the fitted motion"
+    strict = MotionDetector("both", FitConfig(max_flagged_share=0.4))
+    default = MotionDetector("both")
+    strict_reasons = [strict.process(f, i, i / 30).reason for i, f in enumerate(frames)]
+    default_reasons = [default.process(f, i, i / 30).reason for i, f in enumerate(frames)]
+    assert strict_reasons[:4] == [""] * 4 and reason in strict_reasons[5:]
+    assert reason not in default_reasons

@@ -201,17 +201,21 @@ class MotionDetector:
         judged = [out.camera for out in outputs.values() if out.camera is not None]
         camera = judged[0] if judged else fit
         known = next((out.observer for out in outputs.values() if out.observer), None)
-        empty = np.zeros((GRID, GRID), bool)
-        if not camera.reliable:
-            self.tracker.coast()
-            return FrameResult(
-                index, time_s, [], empty, known, None, flow, outputs, camera=camera,
-                reason=camera.reason,
-            )  # fmt: skip
         union = np.zeros(flow.shape, bool)
         for out in outputs.values():
             union |= out.mask
-        confirmed = self.tracker.update(group_objects(union, flow.velocity_px, self.tracker.config))
+        objects = group_objects(union, flow.velocity_px, self.tracker.config)
+        covered = sum(float(o.mask.mean()) for o in objects)
+        reason = camera.reason
+        if not reason and covered > self.fit_config.max_flagged_share:
+            reason = "most of the frame off the fitted motion"
+        empty = np.zeros((GRID, GRID), bool)
+        if reason:
+            self.tracker.coast()
+            return FrameResult(
+                index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
+            )
+        confirmed = self.tracker.update(objects)
         regions = [object_region(obj, outputs, flow.geometry) for obj in confirmed]
         mask = np.zeros(flow.shape, bool)
         for obj in confirmed:

@@ -64,7 +64,9 @@ def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
     """Readable at any size: outlined, scaled to the frame (320 px wide and up)."""
     scale = max(0.4, out.shape[1] / 800)
     thick = max(1, round(scale * 1.5))
-    cv2.putText(out, text, origin, _FONT, scale, (0, 0, 0), thick + 2, cv2.LINE_AA)
+    x, y = origin
+    for dx, dy in ((-1, -1), (1, -1), (-1, 1), (1, 1)):  # an outline of the same glyph widths
+        cv2.putText(out, text, (x + dx, y + dy), _FONT, scale, (0, 0, 0), thick, cv2.LINE_AA)
     cv2.putText(out, text, origin, _FONT, scale, colour, thick, cv2.LINE_AA)
 
 
