@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import json
+import logging
 import multiprocessing
 import os
 import signal
@@ -111,6 +112,12 @@ def output_lock(output: Path):
             fcntl.flock(fp, fcntl.LOCK_UN)
 
 
+def _one_thread_per_worker() -> None:
+    """One BLAS thread per worker process: the parallelism is across inputs."""
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
+
 def _worker_init() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     cv2.setNumThreads(1)
@@ -119,9 +126,7 @@ def _worker_init() -> None:
 def _run_pool(jobs: list[InputJob], settings: Settings, finish) -> None:
     """``jobs`` in worker processes; a signal cancels the queue and ends the workers."""
     # spawn, not fork: forking after OpenCV's thread pool started can deadlock.
-    # One thread per worker process: the parallelism is across inputs.
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
+    _one_thread_per_worker()
     context = multiprocessing.get_context("spawn")
     pool = ProcessPoolExecutor(settings.jobs, mp_context=context, initializer=_worker_init)
     try:
@@ -162,9 +167,11 @@ def _dask_client(scheduler: str, workers: int):
             "--scheduler needs the dask extra: pip install 'motiondetect[dask]'"
         ) from None
     if scheduler == "local":
+        _one_thread_per_worker()  # the workers inherit this environment
         cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+            silence_logs=logging.CRITICAL,  # its shutdown races are not the user's business
+        )  # fmt: skip
         return Client(cluster), cluster
     try:
         return Client(scheduler, timeout="10s"), None
