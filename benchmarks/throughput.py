@@ -3,6 +3,7 @@
     python benchmarks/throughput.py                 # speed, 512x512 and 1920x1080
     python benchmarks/throughput.py --memory        # peak RSS, long vs short 1080p video
     python benchmarks/throughput.py --batch         # --jobs 2 against --jobs 1
+    python benchmarks/throughput.py --encode        # writing the annotated video, per preset
 
 Speed: ``detect`` end to end (decode included) in several variants, and in
 the same run on the same file decode-only and OpenCV MOG2 per frame. Each
@@ -36,9 +37,11 @@ from motiondetect.measurement.normal_flow import NormalFlowPipeline  # noqa: E40
 
 VARIANTS = {
     "detect both, reports, no video": dict(detector="both", video=False, timeline=False),
-    "detect both, reports + annotated video": dict(detector="both", video=True, timeline=False),
-    "detect both, reports + annotated mp4": dict(
+    "detect both, reports + annotated H.264 mp4": dict(
         detector="both", video=True, video_format="mp4", timeline=False
+    ),
+    "detect both, reports + annotated VP8 webm": dict(
+        detector="both", video=True, video_format="webm", timeline=False
     ),
     "detect both --measure normal, no video": dict(
         detector="both", measure="normal", video=False, timeline=False
@@ -46,6 +49,39 @@ VARIANTS = {
     "detect constraint-ray only": dict(detector="constraint-ray", video=False, timeline=False),
     "detect animate only": dict(detector="animate", video=False, timeline=False),
 }
+
+
+def decode_pyav(path: Path) -> int:
+    """What the tool's own reader does: PyAV decode to BGR arrays."""
+    with open_source(path) as source:
+        return sum(1 for _ in source)
+
+
+def encode_cost(clip: Path, tmp: Path) -> None:
+    """Writing the annotated video alone: ms per frame and size, per format and x264 preset."""
+    from motiondetect.io import encode as enc
+
+    with open_source(clip) as source:
+        frames = [f.image for f in source]
+    h, w = frames[0].shape[:2]
+    size_in = clip.stat().st_size
+    print(f"\nwriting {len(frames)} frames of {w}x{h} (input {size_in / 1e6:.2f} MB):")
+    presets = ["ultrafast", "superfast", "veryfast", "faster", "medium"]
+    default = dict(enc.FORMATS[".mp4"][2])
+    try:
+        for suffix, preset in [(".mp4", p) for p in presets] + [(".webm", None), (".mkv", None)]:
+            if preset is not None:
+                enc.FORMATS[".mp4"][2]["preset"] = preset
+            out = tmp / f"enc{suffix}"
+            t = time.perf_counter()
+            with enc.VideoSink(out, 30.0, (w, h)) as sink:
+                for f in frames:
+                    sink.write(f)
+            ms = 1000 * (time.perf_counter() - t) / len(frames)
+            label = f"{suffix[1:]} {preset or ''}".strip()
+            print(f"  {label:18s} {ms:6.2f} ms/frame  {out.stat().st_size / 1e6:6.2f} MB")
+    finally:
+        enc.FORMATS[".mp4"][2].update(default)
 
 
 def stages_only(path: Path) -> int:
@@ -77,7 +113,8 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
             times.append(time.perf_counter() - t)
         return n / min(times)
 
-    rows.append(("decode only", best(lambda: decode_only(clip))))
+    rows.append(("decode only, OpenCV", best(lambda: decode_only(clip))))
+    rows.append(("decode only, PyAV (the tool's decoder)", best(lambda: decode_pyav(clip))))
     rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
     rows.append(("stage pipeline only (decode + stages)", best(lambda: stages_only(clip))))
     for name, options in VARIANTS.items():
@@ -227,6 +264,7 @@ def main() -> None:
     parser.add_argument("--videos", type=int, default=4, help="inputs of the --batch run")
     parser.add_argument("--real", action="store_true", help="whole processes on real clips")
     parser.add_argument("--quick", action="store_true", help="512x512 only")
+    parser.add_argument("--encode", action="store_true", help="video writing cost per preset")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
@@ -238,6 +276,9 @@ def main() -> None:
             return
         if args.real:
             real(tmp)
+            return
+        if args.encode:
+            encode_cost(make_pan_clip(tmp / "clip512.mp4", (512, 512), args.frames), tmp)
             return
         for size in ((512, 512),) if args.quick else ((512, 512), (1920, 1080)):
             clip = make_pan_clip(tmp / f"clip{size[0]}.mp4", size, args.frames)

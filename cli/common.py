@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
-import os
 import sys
 
+import av
 import click
 from tqdm import tqdm
 
@@ -26,8 +27,9 @@ def _setup_logging(verbose: bool, quiet: bool, logfile=None) -> None:
     """stderr at WARNING (ERROR with -q, DEBUG with -v); ``logfile`` gets
     everything, DEBUG included, with timestamps."""
     level = logging.DEBUG if verbose else (logging.ERROR if quiet else logging.WARNING)
-    if verbose:  # FFmpeg's warnings too (read when the first video is opened)
-        os.environ["OPENCV_FFMPEG_LOGLEVEL"] = "24"
+    for stream in (sys.stdout, sys.stderr):  # file names need not be valid UTF-8
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(errors="backslashreplace")
     handler = _BarSafeHandler()
     handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
     handler.setLevel(level)
@@ -44,6 +46,10 @@ def _setup_logging(verbose: bool, quiet: bool, logfile=None) -> None:
     log.handlers[:] = handlers
     log.setLevel(logging.DEBUG if logfile is not None else level)
     log.propagate = False
+    libav = logging.getLogger("libav")  # FFmpeg's own lines, through PyAV: only with -v
+    libav.handlers[:] = handlers if verbose else []
+    libav.propagate = False
+    av.logging.set_level(av.logging.WARNING if verbose else None)
 
 
 def close_log_files() -> None:

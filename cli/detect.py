@@ -29,7 +29,7 @@ def _d(key: str) -> str:
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("inputs", nargs=-1, required=True, type=click.Path())
 @click.option(
     "-o", "--output", type=click.Path(path_type=Path), help=f"Output folder {_d('output')}."
 )
@@ -51,12 +51,12 @@ def _d(key: str) -> str:
     f"N-1 frames; 1 is the detectors' raw output {_d('persistence')}.",
 )
 @click.option("--masks/--no-masks", default=None, help="Write masks/NNNNNN.png (0/255).")
-@click.option("--video/--no-video", default=None, help="Write annotated.webm (default: on).")
+@click.option("--video/--no-video", default=None, help="Write annotated.mp4 (default: on).")
 @click.option(
     "--video-format",
     type=click.Choice(choices_of("video_format")),
-    help="annotated.webm (VP8, plays in browsers) or annotated.mp4 (MPEG-4 Part 2, "
-    f"several times faster to encode, not for browsers) {_d('video_format')}.",
+    help="mp4: H.264, plays in browsers and players; webm: VP8; mkv: lossless FFV1, "
+    f"for frame-exact review {_d('video_format')}.",
 )
 @click.option(
     "--work-size",

@@ -16,7 +16,7 @@ from motiondetect_cli.common import _fail, _guard
 
 
 @click.command()
-@click.argument("inputs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("inputs", nargs=-1, required=True, type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per input.")
 def info(inputs, as_json) -> None:
     """Print what the tool sees in each input: frames, fps, size and codec."""

@@ -70,7 +70,7 @@ def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = T
     assert (out / "events.csv").exists()
     assert (out / "timeline.png").exists() == timeline
     if video:
-        assert decode_count(out / "annotated.webm") == frames
+        assert decode_count(out / "annotated.mp4") == frames
     return summary
 
 
@@ -156,7 +156,7 @@ def test_config_file_sets_the_same_keys(tmp_path, clip):
     assert result.exit_code == 0, result.output
     settings = json.loads((tmp_path / "out" / "pan" / "summary.json").read_text())["settings"]
     assert settings["detector"] == "animate" and settings["work_size"] == 320
-    assert not (tmp_path / "out" / "pan" / "annotated.webm").exists()
+    assert not (tmp_path / "out" / "pan" / "annotated.mp4").exists()
     # The command line wins over the file.
     result = invoke(
         "detect", clip, "-o", tmp_path / "o2", "--config", config, "-q", "--detector", "both"

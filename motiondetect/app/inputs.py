@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from motiondetect.io.decode import STDIN, is_device, is_stream_location
+from motiondetect.io.files import display_name
 from motiondetect.io.video import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, is_frames_folder
 
 log = logging.getLogger("motiondetect")
@@ -27,8 +30,30 @@ class InputError(Exception):
 
 @dataclass(frozen=True)
 class InputJob:
+    """One input of a batch and its output folder name.
+
+    ``location`` is set for a *stream*, read once as it arrives: a URL,
+    ``-`` (standard input) or a capture device. A stream is never skipped as
+    finished, and has no second pass (clips, thumbnails).
+    """
+
     path: Path
     name: str  # relative output folder name
+    location: str | None = None
+
+    @property
+    def is_stream(self) -> bool:
+        return self.location is not None
+
+    @property
+    def source(self) -> str | Path:
+        """What :func:`~motiondetect.io.video.open_source` opens."""
+        return self.path if self.location is None else self.location
+
+    @property
+    def label(self) -> str:
+        """The input as the user named it, for messages."""
+        return display_name(self.path if self.location is None else self.location)
 
 
 @dataclass
@@ -39,8 +64,17 @@ class InputResult:
     summary: dict = field(default_factory=dict)
 
 
+def stream_job(location: str) -> InputJob:
+    """The job of a URL, ``-`` or a capture device; its name is readable and safe."""
+    if location == STDIN:
+        name = "stdin"
+    else:
+        name = re.sub(r"[^A-Za-z0-9._-]+", "_", location.split("://", 1)[-1]).strip("._")
+    return InputJob(Path(name or "stream"), name or "stream", location)
+
+
 def discover_inputs(
-    paths: list[Path],
+    paths: list[str | Path],
     recursive: bool,
     *,
     output: Path | None = None,
@@ -60,8 +94,14 @@ def discover_inputs(
     """
     scanner = _Scanner(recursive, output, include, exclude)
     jobs: list[InputJob] = []
-    for path in paths:
-        if path.is_dir() and not is_frames_folder(path):
+    for given in paths:
+        if isinstance(given, str) and is_stream_location(given):
+            jobs.append(stream_job(given))
+            continue
+        path = Path(given)
+        if is_device(path):
+            jobs.append(stream_job(str(path)))
+        elif path.is_dir() and not is_frames_folder(path):
             found = scanner.scan(path)
             if not found:
                 jobs.append(InputJob(path, path.name))  # fails later with a clear message
@@ -147,14 +187,17 @@ def unique_names(jobs: list[InputJob]) -> list[InputJob]:
         while name in taken:
             name, n = f"{base}-{n}", n + 1
         taken.add(name)
-        out.append(InputJob(job.path, name))
+        out.append(InputJob(job.path, name, job.location))
     return out
 
 
-def input_identity(path: Path) -> dict:
+def input_identity(job: InputJob) -> dict:
     """What makes an input the same input on a re-run: its real path, size,
     modification time and a hash of its first MiB (of its file list, for a
-    frames folder)."""
+    frames folder). A stream has only its location: it is never the same."""
+    if job.is_stream:
+        return {"path": job.location, "stream": True}
+    path = job.path
     real = path.resolve()
     stat = real.stat()
     digest = hashlib.sha256()

@@ -45,6 +45,27 @@ from motiondetect.io.video import (
 log = logging.getLogger("motiondetect")
 
 
+class StreamStop:
+    """Set by the runner's signal handler while a stream is read in this
+    process: the stream closes after its current frame, with every output
+    complete and ``status: stopped``; the runner then exits 130 or 143."""
+
+    def __init__(self) -> None:
+        self.reading = False  # a stream is being read now
+        self.code = 0  # the exit code asked for, once a signal came
+
+    @contextlib.contextmanager
+    def around(self, job: InputJob):
+        self.reading = job.is_stream
+        try:
+            yield
+        finally:
+            self.reading = False
+
+
+STREAM_STOP = StreamStop()
+
+
 def make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
     """The detector a run's settings describe, with its known ego-motion if any."""
     ego = None
@@ -64,10 +85,12 @@ def make_detector(settings: Settings, source: FrameSource) -> MotionDetector:
 
 def _check_paths(job: InputJob, out_dir: Path) -> None:
     """No output may ever point at (or inside) an input."""
+    if job.is_stream:
+        return
     src = job.path.resolve()
     dst = out_dir.resolve()
     if dst == src or src in dst.parents or (src.is_dir() and dst.is_relative_to(src)):
-        raise InputError(f"{job.path}: the output folder {out_dir} would be inside the input")
+        raise InputError(f"{job.label}: the output folder {out_dir} would be inside the input")
 
 
 def process_input(
@@ -75,18 +98,19 @@ def process_input(
 ) -> InputResult:
     """Detect motion in one input and write its outputs. Never raises for bad input."""
     out_dir = settings.output / job.name
-    if (out_dir / "summary.json").exists() and not settings.overwrite:
+    if (out_dir / "summary.json").exists() and not (settings.overwrite or job.is_stream):
         finished = _finished(job, out_dir, settings)
         if finished is not None:
-            log.info("%s: %s", job.path, finished.message)
+            log.info("%s: %s", job.label, finished.message)
             return finished
-    log.info("%s: processing into %s", job.path, out_dir)
-    result = _guarded(job, settings, out_dir, progress)
+    log.info("%s: processing into %s", job.label, out_dir)
+    with STREAM_STOP.around(job):
+        result = _guarded(job, settings, out_dir, progress)
     if result.status == "done":
         totals = result.summary["totals"]
-        log.info("%s: done, %d frames, %d events", job.path, totals["frames"], totals["events"])
+        log.info("%s: done, %d frames, %d events", job.label, totals["frames"], totals["events"])
     else:
-        log.info("%s: failed: %s", job.path, result.message)
+        log.info("%s: failed: %s", job.label, result.message)
     return result
 
 
@@ -94,14 +118,14 @@ def _finished(job: InputJob, out_dir: Path, settings: Settings) -> InputResult |
     """The result of a finished earlier run into ``out_dir``, or None to (re)do it."""
     try:
         done = json.loads((out_dir / "summary.json").read_text(encoding="utf-8"))
-        identity, previous = input_identity(job.path), done["input"].get("identity")
+        identity, previous = input_identity(job), done["input"].get("identity")
     except (OSError, ValueError, KeyError, TypeError):
         return None  # unreadable: redo it
     if previous != identity:
         other = (previous or {}).get("path", done["input"].get("path"))
         return InputResult(
             job, "failed",
-            f"{job.path}: {out_dir} holds the results of another input ({other}); "
+            f"{job.label}: {out_dir} holds the results of another input ({other}); "
             "use another --output or --overwrite",
         )  # fmt: skip
     if done.get("settings_hash") != settings.result_hash():
@@ -117,7 +141,7 @@ def _guarded(
     """The failure boundary of one input: every exception becomes its failure."""
     try:
         _check_paths(job, out_dir)
-        with open_source(job.path, settings.frames_fps) as source:
+        with open_source(job.source, settings.frames_fps) as source:
             summary = _process(job, source, out_dir, settings, progress)
         return InputResult(job, "done", summary=summary)
     except (VideoError, InputError) as exc:
@@ -125,13 +149,13 @@ def _guarded(
     except OSError as exc:
         where = exc.filename or out_dir
         return InputResult(
-            job, "failed", f"{job.path}: cannot write {where}: {exc.strerror or exc}"
+            job, "failed", f"{job.label}: cannot write {where}: {exc.strerror or exc}"
         )
     except MemoryError:
-        return InputResult(job, "failed", f"{job.path}: out of memory")
+        return InputResult(job, "failed", f"{job.label}: out of memory")
     except Exception as exc:  # the failure boundary: any bug stays this input's failure
-        log.debug("%s: internal error", job.path, exc_info=True)
-        return InputResult(job, "failed", f"{job.path}: internal error: {exc!r}")
+        log.debug("%s: internal error", job.label, exc_info=True)
+        return InputResult(job, "failed", f"{job.label}: internal error: {exc!r}")
 
 
 class _FrameWriters:
@@ -166,7 +190,7 @@ class _FrameWriters:
             mask = result.input_mask(self.info.width, self.info.height)
             write_image(self.masks_dir / f"{result.index:06d}.png", mask)
         if self.sink is not None:
-            self.sink.write(annotate(to_display(frame.image), result, self.size))
+            self.sink.write(annotate(to_display(frame.image), result, self.size), frame.time_s)
         return record
 
     def close(self, ok: bool) -> None:
@@ -184,6 +208,8 @@ def _detect_frames(
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections = EventTimeline(), 0
     for frame in source:
+        if STREAM_STOP.code and not source.seekable:
+            break  # Ctrl-C on a stream: close it with complete outputs
         before, past = settings.in_range(frame.index, frame.time_s)
         if past:
             break
@@ -200,6 +226,23 @@ def _detect_frames(
         if progress is not None:
             progress(len(timeline), info.frame_count)
     return timeline, detections
+
+
+def _second_passes(
+    job: InputJob, source: FrameSource, out_dir: Path, events: list[dict], settings: Settings
+) -> None:
+    """Clips and thumbnails read the input again: a stream cannot be."""
+    wanted = [flag for flag, on in (("--clips", settings.extract_clips),
+                                    ("--thumbnails", settings.thumbnails)) if on]  # fmt: skip
+    if not (wanted and events):
+        return
+    if not source.seekable:
+        log.warning("%s: %s need a file; not written for a stream", job.label, " and ".join(wanted))
+        return
+    if settings.extract_clips:
+        extract_clips(job.path, out_dir / "events", events, settings)
+    if settings.thumbnails:
+        write_thumbnails(job.path, out_dir, events, settings)
 
 
 def _prepare(out_dir: Path) -> None:
@@ -223,19 +266,16 @@ def _process(
     writers.close(ok=len(timeline) > 0)
     elapsed = time.perf_counter() - started
     if len(timeline) == 0:
-        raise InputError(f"{job.path}: no frames could be decoded")
+        raise InputError(f"{job.label}: no frames could be decoded")
     events = timeline.events(settings.event_rules(source.info.fps), source.info.fps)
     with atomic_text(out_dir / "events.csv") as fp:
         write_events_csv(fp, events)
     if settings.timeline:
         write_image(out_dir / "timeline.png", draw_timeline(timeline, events))
-    if settings.extract_clips and events:
-        extract_clips(job.path, out_dir / "events", events, settings)
-    if settings.thumbnails and events:
-        write_thumbnails(job.path, out_dir, events, settings)
+    _second_passes(job, source, out_dir, events, settings)
     if source.partial:
         log.warning(
-            "%s: input is truncated or damaged; processed %d frames", job.path, len(timeline)
+            "%s: input is truncated or damaged; processed %d frames", job.label, len(timeline)
         )
     totals = {
         "frames": len(timeline),
@@ -245,11 +285,14 @@ def _process(
     }
     outputs = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
     status = "partial" if source.partial else "complete"
+    if STREAM_STOP.code and not source.seekable:
+        status = "stopped"
     summary = summary_record(
-        str(job.path), source.info, status, settings.to_json(), totals, elapsed, events, outputs
+        job.label, source.info, status, settings.to_json(), totals, elapsed, events, outputs
     )
-    summary["input"]["identity"] = input_identity(job.path)
+    summary["input"]["identity"] = input_identity(job)
     summary["settings_hash"] = settings.result_hash()
+    summary["decode_errors"] = source.decode_errors
     with atomic_text(out_dir / "summary.json") as fp:
         write_json(fp, summary)
     return summary

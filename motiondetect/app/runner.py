@@ -30,7 +30,7 @@ from motiondetect.app.inputs import (
     Progress,
     discover_inputs,
 )
-from motiondetect.app.process import process_input
+from motiondetect.app.process import STREAM_STOP, process_input
 from motiondetect.app.settings import Settings
 from motiondetect.io.report import atomic_text, write_events_csv
 
@@ -81,7 +81,11 @@ def _stopping_on_signals():
         return
 
     def stop(signum, frame):
-        raise Interrupted(143 if signum == signal.SIGTERM else 130)
+        code = 143 if signum == signal.SIGTERM else 130
+        if STREAM_STOP.reading and not STREAM_STOP.code:  # a second signal does not wait
+            STREAM_STOP.code = code
+            return
+        raise Interrupted(code)
 
     saved = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
     try:
@@ -136,7 +140,7 @@ def _run_pool(jobs: list[InputJob], settings: Settings, finish) -> None:
             try:
                 finish(future.result())
             except Exception as exc:  # a crashed worker: report, keep going
-                finish(InputResult(job, "failed", f"{job.path}: worker failed: {exc}"))
+                finish(InputResult(job, "failed", f"{job.label}: worker failed: {exc}"))
     except BaseException:
         workers = list(getattr(pool, "_processes", {}).values())
         pool.shutdown(wait=False, cancel_futures=True)
@@ -200,7 +204,7 @@ def _run_dask(jobs: list[InputJob], settings: Settings, finish) -> None:
                 try:
                     finish(future.result())
                 except Exception as exc:  # a lost worker: report, keep going
-                    finish(InputResult(job, "failed", f"{job.path}: worker failed: {exc}"))
+                    finish(InputResult(job, "failed", f"{job.label}: worker failed: {exc}"))
         except BaseException:
             client.cancel(list(futures))
             raise
@@ -240,13 +244,20 @@ def run(
             on_done(result)
 
     with output_lock(settings.output), _stopping_on_signals():
-        if settings.scheduler is not None:
-            _run_dask(jobs, settings, finish)
-        elif settings.jobs <= 1 or len(jobs) <= 1:
-            for job in jobs:
+        STREAM_STOP.code = 0
+        streams = [job for job in jobs if job.is_stream]  # read here, where stdin is
+        for job in streams:
+            finish(process_input(job, settings, on_start(job, 0) if on_start else None))
+            if STREAM_STOP.code:
+                raise Interrupted(STREAM_STOP.code)
+        files = [job for job in jobs if not job.is_stream]
+        if settings.scheduler is not None and files:
+            _run_dask(files, settings, finish)
+        elif settings.jobs <= 1 or len(files) <= 1:
+            for job in files:
                 finish(process_input(job, settings, on_start(job, 0) if on_start else None))
         else:
-            _run_pool(jobs, settings, finish)
+            _run_pool(files, settings, finish)
         order = {job: i for i, job in enumerate(jobs)}
         results.sort(key=lambda r: order.get(r.job, 0))
         if len(jobs) > 1:
@@ -271,5 +282,5 @@ def batch_events(output: Path, results: list[InputResult]) -> list[dict]:
                 summary = json.loads(text)
             except (OSError, ValueError):
                 summary = {}
-        rows.extend({**ev, "input": str(result.job.path)} for ev in summary.get("events", []))
+        rows.extend({**ev, "input": result.job.label} for ev in summary.get("events", []))
     return rows

@@ -71,7 +71,7 @@ RUN_DEFAULTS: dict[str, object] = {
     "work_size": None,  # the chosen measurement's own default (see _WORK_SIZE)
     "masks": False,
     "video": True,
-    "video_format": "webm",
+    "video_format": "mp4",
     "video_size": 512,
     "egomotion": None,
     "jobs": 1,
@@ -102,7 +102,7 @@ RUN_DEFAULTS: dict[str, object] = {
 RUN_CHECKS: dict[str, tuple] = {
     "detector": ("constraint-ray", "animate", "both"),
     "measure": ("velocity", "normal"),
-    "video_format": ("webm", "mp4"),
+    "video_format": ("mp4", "webm", "mkv"),
     "work_size": (int, 64, 4096),
     "video_size": (int, 64, 4096),
     "jobs": (int, 1, 64),

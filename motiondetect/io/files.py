@@ -48,3 +48,9 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def display_name(path: str | Path) -> str:
+    """``path`` as valid text for messages and reports: bytes a file name may
+    hold that are not UTF-8 appear as ``\\xff`` escapes."""
+    return str(path).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")

@@ -1,0 +1,101 @@
+"""A frames folder: a directory whose files include at least two images
+(JPEG, PNG, BMP, TIFF) and no video.
+
+Frames are sorted by the last number in their names (``frame_2`` before
+``frame_10``); other files are skipped with a warning; 16-bit and grey
+images are kept as they are; times step by the given (or assumed) fps.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from motiondetect.io.files import last_number
+from motiondetect.io.source import (
+    DEFAULT_FRAMES_FPS,
+    IMAGE_EXTENSIONS,
+    VIDEO_EXTENSIONS,
+    FrameSource,
+    SourceFrame,
+    VideoError,
+    VideoInfo,
+    check_size,
+)
+
+log = logging.getLogger("motiondetect")
+
+
+def numeric_key(path: Path) -> tuple:
+    """Sort key of a frame file: its last number, then its name."""
+    number = last_number(path)
+    return (-1 if number is None else number, path.name)
+
+
+def is_frames_folder(path: Path) -> bool:
+    """The documented rule: >= 2 image files and no video file directly inside."""
+    if not path.is_dir():
+        return False
+    images = videos = 0
+    for entry in path.iterdir():
+        suffix = entry.suffix.lower()
+        if entry.is_file():
+            images += suffix in IMAGE_EXTENSIONS
+            videos += suffix in VIDEO_EXTENSIONS
+    return images >= 2 and videos == 0
+
+
+class FramesFolderSource(FrameSource):
+    def __init__(self, path: Path, fps: float | None) -> None:
+        fps_source = "assumed" if fps is None else "given"
+        fps = DEFAULT_FRAMES_FPS if fps is None else fps
+        files, stray = [], []
+        for entry in path.iterdir():
+            if entry.is_file() and entry.suffix.lower() in IMAGE_EXTENSIONS:
+                files.append(entry)
+            elif not entry.name.startswith("."):
+                stray.append(entry.name)
+        if stray:
+            log.warning("%s: skipping %d non-image entries (e.g. %s)", path, len(stray), stray[0])
+        files.sort(key=numeric_key)
+        numbers = [numeric_key(f)[0] for f in files]
+        gaps = sum(1 for a, b in zip(numbers, numbers[1:]) if b - a > 1)
+        if gaps:
+            log.warning("%s: frame numbering has %d gaps; frames are taken in order", path, gaps)
+        first = self._read(files[0]) if files else None
+        if first is None:
+            raise VideoError(f"{path}: no readable image frames")
+        h, w = first.shape[:2]
+        check_size(w, h, str(path))
+        self._files, self._numbers, self._first = files, numbers, first
+        self.info = VideoInfo(
+            str(path), "frames", w, h, fps, len(files), "image-sequence", 0, fps_source
+        )
+        self.partial = False
+
+    @staticmethod
+    def _read(file: Path) -> np.ndarray | None:
+        data = np.fromfile(str(file), np.uint8)  # unicode-safe, unlike cv2.imread
+        if data.size == 0:
+            return None
+        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+
+    def __iter__(self) -> Iterator[SourceFrame]:
+        shape = self._first.shape
+        index = 0
+        for i, file in enumerate(self._files):
+            image = self._first if i == 0 else self._read(file)
+            if image is None or image.shape[:2] != shape[:2]:
+                log.warning("%s: skipping unreadable or differently sized frame", file)
+                self.partial = True
+                continue
+            yield SourceFrame(index, index / self.info.fps, image, self._numbers[i])
+            index += 1
+
+    @property
+    def frame_numbers(self) -> list[int]:
+        return list(self._numbers)

@@ -1,0 +1,101 @@
+"""What every input looks like to the pipeline: its description and its frames.
+
+A source is read frame by frame (memory stays flat in video length). Its
+kinds live beside this module: :mod:`motiondetect.io.decode` (anything
+FFmpeg opens, through PyAV) and :mod:`motiondetect.io.frames_folder`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+IMAGE_EXTENSIONS = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff"}
+VIDEO_EXTENSIONS = {
+    ".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv", ".flv",
+    ".ts", ".mts", ".m2ts", ".3gp", ".ogv", ".y4m",
+}  # fmt: skip
+DEFAULT_FRAMES_FPS = 30.0
+MIN_FRAME_SIDE = 64
+MAX_FRAME_PIXELS = 16384 * 16384
+
+
+class VideoError(Exception):
+    """An input cannot be read as video; the message is one line for the user."""
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What the tool sees in an input.
+
+    ``rotation_deg`` is the clockwise turn the container asks for (applied
+    to the frames); ``fps_source`` says where ``fps`` came from:
+    ``"container"``, ``"given"`` (``--frames-fps``), ``"timestamps"``
+    (measured from the first frames' timestamps) or ``"assumed"``.
+    """
+
+    path: str
+    kind: str  # "video", "stream" or "frames"
+    width: int
+    height: int
+    fps: float
+    frame_count: int  # as the container states it; 0 when unknown
+    codec: str
+    rotation_deg: int = 0
+    fps_source: str = "container"
+    interlaced: bool = False
+
+    @property
+    def duration_s(self) -> float:
+        return self.frame_count / self.fps if self.fps > 0 else 0.0
+
+    def to_json(self) -> dict:
+        out = asdict(self)
+        out["duration_s"] = round(self.duration_s, 4)
+        return out
+
+
+@dataclass(frozen=True)
+class SourceFrame:
+    index: int  # 0-based, in presentation order
+    time_s: float  # from the stream's timestamps, 0 at the stream's start
+    image: np.ndarray
+    number: int | None = None  # the number in a frame file's name
+
+
+class FrameSource:
+    """Iterate the frames of one input. Use :func:`motiondetect.io.video.open_source`.
+
+    After iteration, ``partial`` says decoding stopped early or skipped
+    damage, and ``decode_errors`` counts the damaged packets skipped.
+    """
+
+    info: VideoInfo
+    partial: bool = False
+    decode_errors: int = 0
+    seekable: bool = True  # False for pipes, URLs and devices: read once, as it arrives
+
+    def __iter__(self) -> Iterator[SourceFrame]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> FrameSource:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def check_size(width: int, height: int, name: str) -> None:
+    """Refuse frames too small to measure motion on, or too large to hold."""
+    if width < MIN_FRAME_SIDE or height < MIN_FRAME_SIDE:
+        raise VideoError(
+            f"{name}: frames are {width}x{height}; at least "
+            f"{MIN_FRAME_SIDE}x{MIN_FRAME_SIDE} pixels are needed"
+        )
+    if width * height > MAX_FRAME_PIXELS:
+        raise VideoError(f"{name}: frames of {width}x{height} are too large to process")
