@@ -9,6 +9,7 @@ the others. A batch of more than one input also gets a top-level
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import fcntl
 import json
 import logging
@@ -154,8 +155,26 @@ def _run_pool(jobs: list[InputJob], settings: Settings, finish) -> None:
     pool.shutdown()
 
 
+# glibc's own adaptive limits reach these; Dask's nanny fixes the trim limit at
+# 64 KiB (MALLOC_TRIM_THRESHOLD_), which also freezes the mmap limit at 128 KiB:
+# every frame-sized array is then mmapped and unmapped, 1.7x slower per input
+# (docs/performance.md).
+MALLOC_LIMITS = {-3: 32 << 20, -1: 64 << 20}  # M_MMAP_THRESHOLD, M_TRIM_THRESHOLD: bytes
+
+
+def _keep_freed_memory() -> None:
+    """Let glibc reuse freed frame buffers, as it does by default."""
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):  # not glibc: nothing to undo
+        return
+    for option, value in MALLOC_LIMITS.items():
+        mallopt(option, value)
+
+
 def _dask_task(job: InputJob, settings: Settings) -> InputResult:
     cv2.setNumThreads(1)  # one thread per worker process, as with --jobs
+    _keep_freed_memory()
     return process_input(job, settings)
 
 
