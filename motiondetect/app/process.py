@@ -22,6 +22,7 @@ from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
 from motiondetect.detection.detector import FrameResult, MotionDetector
 from motiondetect.detection.events import EventTimeline
 from motiondetect.io.annotate import annotate, annotated_size
+from motiondetect.io.encode import BackgroundSink
 from motiondetect.io.files import TEMPORARY_PREFIX
 from motiondetect.io.records import frame_record, summary_record
 from motiondetect.io.report import (
@@ -170,7 +171,11 @@ class _FrameWriters:
             self.masks_dir.mkdir()
         self.size = annotated_size(info.width, info.height, settings.video_size)
         video = out_dir / f"annotated.{settings.video_format}"
-        self.sink = VideoSink(video, info.fps, self.size) if settings.video else None
+        self.sink = (
+            BackgroundSink(VideoSink(video, info.fps, self.size), self._draw)
+            if settings.video
+            else None
+        )
         with contextlib.ExitStack() as files:  # every file closes, whatever fails first
             jsonl = files.enter_context(open(out_dir / "frames.jsonl", "w", encoding="utf-8"))
             csv = files.enter_context(
@@ -190,8 +195,12 @@ class _FrameWriters:
             mask = result.input_mask(self.info.width, self.info.height)
             write_image(self.masks_dir / f"{result.index:06d}.png", mask)
         if self.sink is not None:
-            self.sink.write(annotate(to_display(frame.image), result, self.size), frame.time_s)
+            self.sink.put((frame, result))
         return record
+
+    def _draw(self, item: tuple[SourceFrame, FrameResult]) -> tuple:
+        frame, result = item
+        return annotate(to_display(frame.image), result, self.size), frame.time_s
 
     def close(self, ok: bool) -> None:
         with self._files:

@@ -21,6 +21,8 @@ by one edge pixel, since 4:2:0 needs even sizes.
 from __future__ import annotations
 
 import os
+import queue
+import threading
 from fractions import Fraction
 from pathlib import Path
 
@@ -115,3 +117,40 @@ class VideoSink:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         self.close(keep=exc_type is None)
+
+
+class BackgroundSink:
+    """Draw and encode on a second thread, while the next frame is detected.
+
+    ``draw(item)`` turns what :meth:`put` is given into a frame; a bounded
+    queue keeps memory flat (at most ``depth`` frames wait). An error on
+    the thread is raised by the next :meth:`put` or by :meth:`close`.
+    """
+
+    def __init__(self, sink: VideoSink, draw, depth: int = 4) -> None:
+        self.sink, self.draw = sink, draw
+        self._queue: queue.Queue = queue.Queue(maxsize=depth)
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, name="video-writer", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while (item := self._queue.get()) is not None:
+            if self._error is None:
+                try:
+                    frame, time_s = self.draw(item)
+                    self.sink.write(frame, time_s)
+                except BaseException as exc:  # handed to the caller's thread
+                    self._error = exc
+
+    def put(self, item) -> None:
+        if self._error is not None:
+            raise self._error
+        self._queue.put(item)
+
+    def close(self, keep: bool = True) -> None:
+        self._queue.put(None)
+        self._thread.join()
+        self.sink.close(keep=keep and self._error is None)
+        if keep and self._error is not None:
+            raise self._error
