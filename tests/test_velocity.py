@@ -204,3 +204,41 @@ def test_most_of_the_frame_off_the_fit_can_mark_a_frame_unreliable():
     default_reasons = [default.process(f, i, i / 30).reason for i, f in enumerate(frames)]
     assert strict_reasons[:4] == [""] * 4 and reason in strict_reasons[5:]
     assert reason not in default_reasons
+
+
+def test_image_changed_finds_a_change_and_ignores_noise():
+    from motiondetect.constraint_ray.velocity_filter import image_changed
+
+    rng = np.random.default_rng(3)
+    diff = np.abs(rng.normal(0, 3.0, (120, 160))).astype(np.uint8)  # the plane explains all
+    diff[40:70, 60:100] += 30  # a mover changed the image here
+    changed = image_changed(diff, 3.0, 5)
+    assert changed[45:65, 65:95].all()
+    outside = np.ones_like(changed)
+    outside[35:75, 55:105] = False
+    assert changed[outside].mean() < 0.002
+
+
+def test_flow_without_image_change_is_not_flagged():
+    """A residual in a blank region (flow's own error) has no photometric evidence."""
+    from motiondetect.constraint_ray.camera_fit import CameraFit
+    from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, VelocityRayDetector
+    from motiondetect.measurement.dense_flow import VelocityField, pixel_grid
+    from motiondetect.measurement.normal_flow import GridGeometry
+
+    h, w = 96, 128
+    rng = np.random.default_rng(0)
+    grey = rng.integers(0, 255, (h, w)).astype(np.uint8)
+    residual = rng.normal(0, 0.1, (h, w, 2)).astype(np.float32)
+    residual[20:40, 20:40] = (3.0, 0.0)  # flow error: the image did not change there
+    residual[50:70, 80:100] = (3.0, 0.0)  # a mover: it did
+    difference = np.abs(rng.normal(0, 2.0, (h, w))).astype(np.uint8)
+    difference[50:70, 80:100] = 40
+    fit = CameraFit(np.eye(3), residual, 0.1, 0.9, None, "", 0.5, difference)
+    velocity = residual  # the plane is the identity: the residual is the velocity
+    geometry = GridGeometry((w, h), (w, h))
+    field = VelocityField(velocity, grey, grey, geometry, pixel_grid(w, h), fit)
+    for sigmas, blank_flagged in ((3.0, False), (0.0, True)):
+        out = VelocityRayDetector(VelocityRayConfig(evidence_sigmas=sigmas)).process(field)
+        assert out.mask[55:65, 85:95].all()
+        assert out.mask[25:35, 25:35].any() == blank_flagged

@@ -114,6 +114,11 @@ class CameraFit:
         None when there is no usable parallax.
     reason : str
         Empty when the frame can be judged; otherwise why not.
+    median_speed_px : float
+        Median speed of the sampled velocities, work px/frame.
+    plane_difference : (h, w) ndarray of uint8 or None
+        ``|grey - previous grey warped by the plane|``, grey levels: where the
+        image changed once the camera's motion is undone.
     """
 
     homography: np.ndarray | None
@@ -123,6 +128,7 @@ class CameraFit:
     epipole: np.ndarray | None
     reason: str = ""
     median_speed_px: float = 0.0
+    plane_difference: np.ndarray | None = None
 
     @property
     def reliable(self) -> bool:
@@ -331,13 +337,14 @@ def fit_camera(
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
     homography, inliers = fit_homography(points, velocity, config.ransac_px)
     share = float(inliers.mean()) if len(inliers) else 0.0
-    cut = 0.0
+    cut, difference = 0.0, None
     if homography is not None:
         h, w = field.shape
         warped = cv2.warpPerspective(
             field.previous_grey, homography, (w, h), flags=cv2.WARP_INVERSE_MAP
         )
-        cut = float(cv2.absdiff(warped, field.grey)[8:-8, 8:-8].mean())
+        difference = cv2.absdiff(warped, field.grey)
+        cut = float(difference[8:-8, 8:-8].mean())
     reason = _reason(homography, share, speed, cut, config)
     if reason:
         return CameraFit(homography, None, 0.0, share, None, reason, speed)
@@ -352,4 +359,4 @@ def fit_camera(
         epipole = fit_epipole(
             points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape, config, previous_epipole
         )
-    return CameraFit(homography, residual, noise, share, epipole, "", speed)
+    return CameraFit(homography, residual, noise, share, epipole, "", speed, difference)

@@ -39,6 +39,9 @@ from motiondetect.measurement.dense_flow import VelocityField
 NAME = "velocity-ray"
 
 
+_ABS_MEDIAN_TO_SIGMA = 1.4826  # sigma of a normal variable from the median of its |value|
+
+
 @dataclass(frozen=True)
 class VelocityRayConfig:
     """Settings of the velocity-space constraint ray filter.
@@ -61,6 +64,13 @@ class VelocityRayConfig:
     edge_px : float
         Width of the untested band along the frame edge, work px, on top of
         the frame's median speed.
+    evidence_sigmas : float
+        A seed must also show a grey-level change after the plane warp: its
+        local mean above this many robust sigmas of the frame's changes (0: off).
+        Flow alone can be wrong (blank sky, smeared boundaries); a mover
+        changes the image where it is.
+    evidence_box : int
+        Side of the box the change is averaged over, work px (about DIS's patch).
     """
 
     noise_sigmas: float = 3.0
@@ -69,6 +79,8 @@ class VelocityRayConfig:
     grow_ratio: float = 0.5
     close_px: int = 5
     edge_px: float = 4.0
+    evidence_sigmas: float = 3.0
+    evidence_box: int = 5
 
     def __post_init__(self) -> None:
         check_fields(
@@ -162,7 +174,11 @@ class VelocityRayDetector:
         else:
             distance = off_ray(fit.residual_px, field.pixel_grid, fit.epipole)
         distance = without_frame_edge(distance, cfg.edge_px + fit.median_speed_px)
-        mask = hysteresis(distance, tolerance, cfg.grow_ratio)
+        seeds = None
+        if cfg.evidence_sigmas > 0 and known is None and fit.plane_difference is not None:
+            changed = image_changed(fit.plane_difference, cfg.evidence_sigmas, cfg.evidence_box)
+            seeds = (distance > tolerance) & changed
+        mask = hysteresis(distance, tolerance, cfg.grow_ratio, seeds)
         if cfg.close_px > 1:
             kernel = np.ones((cfg.close_px, cfg.close_px), np.uint8)
             mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, kernel) > 0
@@ -170,6 +186,29 @@ class VelocityRayDetector:
         return DetectorOutput.from_mask(
             mask, strength, camera=_with_known(fit, known), observer=known
         )
+
+
+def image_changed(difference: np.ndarray, sigmas: float, box: int) -> np.ndarray:
+    """Where the image changed beyond noise once the camera's motion is undone.
+
+    Parameters
+    ----------
+    difference : (h, w) ndarray of uint8
+        ``CameraFit.plane_difference``, grey levels.
+    sigmas : float
+        Threshold in robust sigmas of the frame's differences (most of a
+        frame is explained by the plane, so their median is its noise).
+    box : int
+        Side of the averaging box, px.
+
+    Returns
+    -------
+    (h, w) ndarray of bool
+    """
+    counts = np.bincount(difference.ravel(), minlength=256)
+    median = int(np.searchsorted(np.cumsum(counts), difference.size / 2))
+    noise = median * _ABS_MEDIAN_TO_SIGMA + 1.0  # + one grey level of quantisation
+    return cv2.blur(difference, (box, box)) > sigmas * noise
 
 
 def _with_known(fit: CameraFit, known: ObserverMotion | None) -> CameraFit:
