@@ -65,6 +65,17 @@ def test_woman_mp4_completes(tmp_path):
     out = detect(tmp_path, source)
     summary = check_outputs(out, 479, video=False)
     assert summary["input"]["width"] == 352 and summary["status"] == "complete"
+    lines = (out / "frames.jsonl").read_text(encoding="utf-8").splitlines()
+    records = {r["frame"]: r for r in map(json.loads, lines)}
+    for frame in range(440, 451):  # the fast turn: box her, or say it cannot tell
+        record = records[frame]
+        if not record["reliable"]:
+            assert record["reason"]
+            continue
+        x, y, w, h = max(record["detections"], key=lambda d: d["area_px"])["bbox"]
+        assert w * h < 0.5 * 352 * 288  # a box on her, not on the whole picture
+        assert x < 200 and x + w > 130 and y < 190 and y + h > 110  # where she walks
+    assert sum(not records[f]["reliable"] for f in range(447, 451)) == 4  # the blur
 
 
 def test_fox_with_known_egomotion(tmp_path):

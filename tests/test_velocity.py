@@ -242,3 +242,18 @@ def test_flow_without_image_change_is_not_flagged():
         out = VelocityRayDetector(VelocityRayConfig(evidence_sigmas=sigmas)).process(field)
         assert out.mask[55:65, 85:95].all()
         assert out.mask[25:35, 25:35].any() == blank_flagged
+
+
+def test_heavily_blurred_frames_are_marked_unreliable():
+    """A fast turn smears the picture: those frames say they cannot be judged."""
+    from .scenes import scene
+
+    frames = [fr.image for fr in scene("pan", ("smooth",), frames=14)]
+    blurred = {9, 10}
+    for i in blurred:
+        frames[i] = cv2.GaussianBlur(frames[i], (0, 0), 4.0)
+    md = MotionDetector("both")
+    reasons = [md.process(f, i, i / 30).reason for i, f in enumerate(frames)]
+    assert [i for i, r in enumerate(reasons) if r == "heavy blur"] == sorted(blurred)
+    off = MotionDetector("both", FitConfig(blur_ratio=0.0))
+    assert all(off.process(f, i, i / 30).reason != "heavy blur" for i, f in enumerate(frames))

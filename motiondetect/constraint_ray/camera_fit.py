@@ -66,6 +66,12 @@ class FitConfig:
         unreliable, but it also discards most frames of parallax-rich scenes
         and of moving water, where the mover is still found (sample
         fixation_waving object recall 0.90 -> 0.09; UCSD birds 0.75 -> 0).
+    blur_ratio : float
+        A frame whose sharpness (variance of its Laplacian) falls below this
+        share of the median of the last ``blur_history`` frames is heavily
+        blurred (a fast turn, a shake): its flow cannot be trusted. 0: off.
+    blur_history : int
+        Frames the sharpness reference is the median of.
     parallax : bool
         Fit an epipole and test only the residual across each point's ray.
         Off by default: measured on every data set, the fitted epipole was
@@ -83,13 +89,27 @@ class FitConfig:
     parallax_sigmas: float = 4.0
     min_parallax_blocks: int = 6
     max_flagged_share: float = 1.0
+    blur_ratio: float = 1.0 / 3.0
+    blur_history: int = 30
     parallax: bool = False
 
     def __post_init__(self) -> None:
         check_fields(
             self,
-            positive=("sample_step_px", "ransac_px", "max_speed_px", "cut_grey", "parallax_sigmas"),
-            non_negative=("min_inlier_share", "min_parallax_blocks", "max_flagged_share"),
+            positive=(
+                "sample_step_px",
+                "ransac_px",
+                "max_speed_px",
+                "cut_grey",
+                "parallax_sigmas",
+                "blur_history",
+            ),
+            non_negative=(
+                "min_inlier_share",
+                "min_parallax_blocks",
+                "max_flagged_share",
+                "blur_ratio",
+            ),
         )
         if self.min_inlier_share >= 1:
             raise ValueError(f"min_inlier_share must be below 1, got {self.min_inlier_share}")
@@ -307,18 +327,29 @@ def fit_epipole(
     return refined if np.dot(refined, best) >= 0 else -refined
 
 
-def _reason(homography, share, speed, cut, config: FitConfig) -> str:
+def sharpness(grey: np.ndarray) -> float:
+    """Variance of the Laplacian of a (h, w) uint8 frame, grey levels squared:
+    fine texture, which motion blur removes."""
+    return float(cv2.Laplacian(grey, cv2.CV_32F).var())
+
+
+def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     if homography is None or share < config.min_inlier_share:
         return "too few inliers"
     if speed > config.max_speed_px:
         return "motion beyond the band"
     if cut > config.cut_grey:
         return "cut"
+    if blurred:
+        return "heavy blur"
     return ""
 
 
 def fit_camera(
-    field: VelocityField, config: FitConfig, previous_epipole: np.ndarray | None = None
+    field: VelocityField,
+    config: FitConfig,
+    previous_epipole: np.ndarray | None = None,
+    reference_sharpness: float | None = None,
 ) -> CameraFit:
     """Fit the observer's motion to one frame's velocity field.
 
@@ -327,6 +358,8 @@ def fit_camera(
     field : VelocityField
     config : FitConfig
     previous_epipole : (3,) ndarray, optional
+    reference_sharpness : float, optional
+        The recent frames' median :func:`sharpness`; none: no blur test.
 
     Returns
     -------
@@ -345,7 +378,10 @@ def fit_camera(
         )
         difference = cv2.absdiff(warped, field.grey)
         cut = float(difference[8:-8, 8:-8].mean())
-    reason = _reason(homography, share, speed, cut, config)
+    blurred = reference_sharpness is not None and (
+        sharpness(field.grey) < config.blur_ratio * reference_sharpness
+    )
+    reason = _reason(homography, share, speed, cut, blurred, config)
     if reason:
         return CameraFit(homography, None, 0.0, share, None, reason, speed)
     residual = plane_residual(field, homography)

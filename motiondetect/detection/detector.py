@@ -14,13 +14,14 @@ detectors chosen by name from the registry, and then:
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, sharpness
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
@@ -168,6 +169,7 @@ class MotionDetector:
             self.pipeline = NormalFlowPipeline(by_type.get(StageConfig))
         self._epipole: np.ndarray | None = None
         self._recent: list[np.ndarray] = []
+        self._sharpness: collections.deque = collections.deque(maxlen=self.fit_config.blur_history)
 
     def reset(self) -> None:
         """Start afresh (a new input, or after a gap in the frames)."""
@@ -176,6 +178,7 @@ class MotionDetector:
         for det in self.detectors.values():
             det.reset()
         self._epipole, self._recent = None, []
+        self._sharpness.clear()
 
     def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
         """Run one frame through the measurement and the detectors."""
@@ -194,7 +197,9 @@ class MotionDetector:
         return FrameResult(index, time_s, regions, flagged, observer, coarse, flow, outputs)
 
     def _velocity_frame(self, flow: VelocityField, index: int, time_s: float) -> FrameResult:
-        fit = fit_camera(flow, self.fit_config, self._epipole)
+        reference = float(np.median(self._sharpness)) if self._sharpness else None
+        fit = fit_camera(flow, self.fit_config, self._epipole, reference)
+        self._sharpness.append(sharpness(flow.grey))
         self._epipole = fit.epipole
         flow = dataclasses.replace(flow, camera=fit)
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
