@@ -44,14 +44,21 @@ class DenseFlowConfig:
     descent_iterations : int or None
         Gradient-descent iterations per patch, replacing the preset's (25
         for "medium"): 8 measured as good on every data set, for less time.
+    patch_stride : int
+        Step between DIS patches, work px (the "medium" preset's is 3): 4
+        changed no data set's pooled cell F1 by more than 0.015 and costs 23 %
+        less (docs/detectors.md).
     """
 
     work_size: int = 320
     preset: Literal["ultrafast", "fast", "medium"] = "medium"
     descent_iterations: int | None = 8
+    patch_stride: int = 4
 
     def __post_init__(self) -> None:
-        check_fields(self, positive=("work_size",), choices={"preset": tuple(PRESETS)})
+        check_fields(
+            self, positive=("work_size", "patch_stride"), choices={"preset": tuple(PRESETS)}
+        )
         if self.descent_iterations is not None:
             check_fields(self, positive=("descent_iterations",))
         if self.work_size < stages.MIN_FRAME_SIDE:
@@ -126,6 +133,7 @@ class DenseFlow:
         self._dis = cv2.DISOpticalFlow_create(PRESETS[self.config.preset])
         if self.config.descent_iterations is not None:
             self._dis.setGradientDescentIterations(self.config.descent_iterations)
+        self._dis.setPatchStride(self.config.patch_stride)
         self._previous: np.ndarray | None = None
         self._geometry: GridGeometry | None = None
         self._grid: np.ndarray | None = None
