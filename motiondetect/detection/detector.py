@@ -24,6 +24,7 @@ import numpy as np
 from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, sharpness
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
+from motiondetect.constraint_ray.velocity_filter import image_changed
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
@@ -32,6 +33,7 @@ from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipelin
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
+_CHANGE_BOX = 3  # px averaged when testing an image change for object support
 
 
 @dataclass(frozen=True)
@@ -209,7 +211,11 @@ class MotionDetector:
         union = np.zeros(flow.shape, bool)
         for out in outputs.values():
             union |= out.mask
-        objects = group_objects(union, flow.velocity_px, self.tracker.config)
+        track = self.tracker.config
+        changed = None
+        if track.support_sigmas > 0 and fit.plane_difference is not None:
+            changed = image_changed(fit.plane_difference, track.support_sigmas, _CHANGE_BOX)
+        objects = group_objects(union, flow.velocity_px, track, changed)
         covered = sum(float(o.mask.mean()) for o in objects)
         reason = camera.reason
         if not reason and covered > self.fit_config.max_flagged_share:

@@ -1,7 +1,10 @@
 """Objects, not fragments: flagged pixels grouped into movers, kept as tracks.
 
-1. **Group.** Flagged pixels closer than ``gap_px`` belong to one object
-   (one walker is one box, not three); holes inside an object are filled.
+1. **Group.** Flagged pixels are kept where the image itself changed (or
+   next to such a change), so a mask does not spill over the background
+   that dense flow smears the mover's velocity into. Pixels closer than
+   ``gap_px`` belong to one object (one walker is one box, not three); an
+   object's mask is closed over its gaps and its holes are filled.
 2. **Track.** Each object is matched to the track whose box, moved by the
    track's own image velocity (which includes the camera's motion), it
    overlaps most. Tracks keep a stable integer id.
@@ -36,19 +39,36 @@ class TrackConfig:
     min_iou : float
         Smallest overlap of a predicted track box and an object box that
         continues the track.
+    support_sigmas : float
+        Flagged pixels are kept only within ``support_px`` of an image change
+        above this many robust sigmas once the camera's motion is undone
+        (0: off). Dense flow spreads a mover's velocity over its
+        surroundings; the image there has not changed, so the mask stops
+        at the mover.
+    support_px : int
+        Reach of that image change, work px (half of DIS's 8-px patch).
     """
 
-    gap_px: int = 6
+    gap_px: int = 10
     min_area_share: float = 0.0005
     persistence: int = 2
     max_missed: int = 5
     min_iou: float = 0.1
+    support_sigmas: float = 3.0
+    support_px: int = 4
 
     def __post_init__(self) -> None:
         check_fields(
             self,
             positive=("persistence",),
-            non_negative=("gap_px", "min_area_share", "max_missed", "min_iou"),
+            non_negative=(
+                "gap_px",
+                "min_area_share",
+                "max_missed",
+                "min_iou",
+                "support_sigmas",
+                "support_px",
+            ),
         )
 
 
@@ -64,7 +84,10 @@ class MovingObject:
 
 
 def group_objects(
-    flagged: np.ndarray, velocity: np.ndarray, config: TrackConfig
+    flagged: np.ndarray,
+    velocity: np.ndarray,
+    config: TrackConfig,
+    changed: np.ndarray | None = None,
 ) -> list[MovingObject]:
     """Group flagged pixels into objects.
 
@@ -74,6 +97,9 @@ def group_objects(
     velocity : (h, w, 2) ndarray of float32
         Image velocity, work px/frame.
     config : TrackConfig
+    changed : (h, w) ndarray of bool, optional
+        Where the image changed once the camera's motion is undone; flagged
+        pixels farther than ``support_px`` from it are dropped.
 
     Returns
     -------
@@ -81,10 +107,14 @@ def group_objects(
     """
     h, w = flagged.shape
     mask = flagged.astype(np.uint8)
-    joined = mask
+    if changed is not None:
+        k = 2 * config.support_px + 1
+        mask &= cv2.dilate(changed.astype(np.uint8), np.ones((k, k), np.uint8))
+    joined, kernel = mask, None
     if config.gap_px > 0:
         k = 2 * (config.gap_px // 2) + 1
-        joined = cv2.dilate(mask, np.ones((k, k), np.uint8))
+        kernel = np.ones((k, k), np.uint8)
+        joined = cv2.dilate(mask, kernel)
     count, labels = cv2.connectedComponents(joined, connectivity=8)
     labels = np.where(mask > 0, labels, 0)
     min_area = config.min_area_share * h * w
@@ -93,6 +123,8 @@ def group_objects(
         own = (labels == label).astype(np.uint8)
         if own.sum() < min_area:
             continue
+        if kernel is not None:
+            own = cv2.morphologyEx(own, cv2.MORPH_CLOSE, kernel)
         contours, _ = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         cv2.drawContours(own, contours, -1, 1, thickness=cv2.FILLED)
         x, y, bw, bh = cv2.boundingRect(own)
