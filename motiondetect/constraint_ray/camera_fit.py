@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
+from motiondetect.constraint_ray.epipole import fit_epipole
 from motiondetect.measurement.dense_flow import VelocityField
 
 #: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
@@ -139,6 +140,10 @@ class CameraFit:
     plane_difference : (h, w) ndarray of uint8 or None
         ``|grey - previous grey warped by the plane|``, grey levels: where the
         image changed once the camera's motion is undone.
+    spread_px : float
+        Robust sigma of the plane residual over the whole frame (inliers or
+        not), work px/frame: the noise plus the rigid parallax the plane
+        leaves (movers are a minority of the samples, so the median ignores them).
     """
 
     homography: np.ndarray | None
@@ -149,6 +154,7 @@ class CameraFit:
     reason: str = ""
     median_speed_px: float = 0.0
     plane_difference: np.ndarray | None = None
+    spread_px: float = 0.0
 
     @property
     def reliable(self) -> bool:
@@ -231,102 +237,6 @@ def fit_homography(
     return homography, mask.ravel().astype(bool)
 
 
-def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None) -> np.ndarray:
-    """How far each residual lies off its point's constraint ray, px/frame.
-
-    Parameters
-    ----------
-    residual : (..., 2) ndarray
-    points : (..., 2) ndarray
-        Work pixels of the residuals.
-    epipole : (3,) ndarray or None
-        Homogeneous. None: no parallax is expected, so the whole residual
-        is off the ray.
-
-    Returns
-    -------
-    (...) ndarray of float32
-        The component of the residual across the line through the point
-        and the epipole (its length where the point is within 1 px of it).
-    """
-    magnitude = np.hypot(residual[..., 0], residual[..., 1])
-    if epipole is None:
-        return magnitude.astype(np.float32)
-    ux = epipole[0] - epipole[2] * points[..., 0]
-    uy = epipole[1] - epipole[2] * points[..., 1]
-    norm = np.hypot(ux, uy)
-    across = np.abs(residual[..., 0] * uy - residual[..., 1] * ux) / np.maximum(norm, 1e-9)
-    near = norm < max(abs(float(epipole[2])), 1e-9)  # within 1 px of a finite epipole
-    return np.where(near, magnitude, across).astype(np.float32)
-
-
-def _lines(points: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """Homogeneous lines through each point along its residual, unit normals, (N, 3)."""
-    n = np.stack([-residual[:, 1], residual[:, 0]], axis=1)
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
-    return np.concatenate([n, -(n * points).sum(axis=1, keepdims=True)], axis=1)
-
-
-def _blocks_covered(points: np.ndarray, shape: tuple[int, int]) -> int:
-    h, w = shape
-    bx = np.minimum((points[:, 0] * 4 / w).astype(int), 3)
-    by = np.minimum((points[:, 1] * 4 / h).astype(int), 3)
-    return len(np.unique(by * 4 + bx))
-
-
-def fit_epipole(
-    points: np.ndarray,
-    residual: np.ndarray,
-    tol_px: float,
-    shape: tuple[int, int],
-    config: FitConfig,
-    previous: np.ndarray | None = None,
-    rng: np.random.Generator | None = None,
-) -> np.ndarray | None:
-    """The epipole that the parallax residuals point to or from, or None.
-
-    Parameters
-    ----------
-    points, residual : (N, 2) ndarray
-        Samples whose residual is well above the noise.
-    tol_px : float
-        Largest off-ray distance of a supporting residual.
-    shape : (h, w)
-        Work frame size, for the spread test.
-    previous : (3,) ndarray, optional
-        Last frame's epipole, tried first (a camera's heading changes slowly).
-
-    Returns
-    -------
-    (3,) ndarray of float64 or None
-        Unit-norm homogeneous epipole; None when the support is too small
-        or too concentrated to be parallax rather than a mover.
-    """
-    if len(points) < 2 * config.min_parallax_blocks:
-        return None
-    rng = rng or np.random.default_rng(0)
-    lines = _lines(points, residual)
-    hypotheses = [previous] if previous is not None else []
-    pairs = rng.integers(0, len(points), size=(64, 2))
-    hypotheses += [np.cross(lines[i], lines[j]) for i, j in pairs if i != j]
-    best, best_support = None, None
-    for e in hypotheses:
-        norm = np.linalg.norm(e)
-        if norm < 1e-12:
-            continue
-        support = off_ray(residual, points, e / norm) < tol_px
-        if best_support is None or support.sum() > best_support.sum():
-            best, best_support = e / norm, support
-    if best is None or best_support.mean() < 0.6:
-        return None
-    if _blocks_covered(points[best_support], shape) < config.min_parallax_blocks:
-        return None
-    # Least squares over the support: the point closest to all its lines.
-    _, _, vt = np.linalg.svd(lines[best_support])
-    refined = vt[-1]
-    return refined if np.dot(refined, best) >= 0 else -refined
-
-
 def sharpness(grey: np.ndarray) -> float:
     """Variance of the Laplacian of a (h, w) uint8 frame, grey levels squared:
     fine texture, which motion blur removes."""
@@ -393,6 +303,12 @@ def fit_camera(
     if config.parallax:
         big = magnitude > config.parallax_sigmas * max(noise, 0.05)
         epipole = fit_epipole(
-            points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape, config, previous_epipole
+            points[big],
+            sampled[big],
+            2.0 * max(noise, 0.1),
+            field.shape,
+            config.min_parallax_blocks,
+            previous_epipole,
         )
-    return CameraFit(homography, residual, noise, share, epipole, "", speed, difference)
+    spread = float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if len(magnitude) else 0.0
+    return CameraFit(homography, residual, noise, share, epipole, "", speed, difference, spread)

@@ -15,10 +15,12 @@ that segment on the gradient; here the velocity itself is tested.
   shortened by the depth bound, as in the normal-flow path.
 
 A point is flagged when it lies off the ray by more than a tolerance set
-by the frame's measured noise (``noise_sigmas`` robust sigmas, at least
-``floor_px``). Flagged points are grown by hysteresis over their
-neighbours that lie off the ray by half as much, so a mover is found
-whole rather than at its strongest edges. Movers that travel *along*
+by the frame's measured noise (``noise_sigmas`` robust sigmas of the
+plane's inliers, ``spread_sigmas`` robust sigmas of the whole frame's
+residual, which carries its rigid parallax, and at least ``floor_px``).
+Flagged points are grown by hysteresis over their neighbours that lie off
+the ray by half as much, so a mover is found whole rather than at its
+strongest edges. Movers that travel *along*
 their ray are invisible to this test (the blind spot, section 3.3).
 """
 
@@ -30,7 +32,8 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, off_ray
+from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
+from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import hysteresis
@@ -51,8 +54,13 @@ class VelocityRayConfig:
     noise_sigmas : float
         Tolerance in robust noise sigmas of the frame's residual.
     floor_px : float
-        Smallest tolerance under the fitted motion, work px/frame: it also
-        absorbs the rigid parallax the plane fit leaves.
+        Smallest tolerance under the fitted motion, work px/frame (DIS's
+        error on textured sub-pixel motion is about 0.1 px).
+    spread_sigmas : float
+        Under the fitted motion the tolerance is also at least this many
+        robust sigmas of the whole frame's plane residual
+        (``CameraFit.spread_px``): the rigid parallax the plane leaves is
+        measured per frame, not assumed.
     known_floor_px : float
         Smallest tolerance under known ego-motion, which leaves no parallax
         unmodelled (the normal-flow filter's floor).
@@ -74,7 +82,8 @@ class VelocityRayConfig:
     """
 
     noise_sigmas: float = 3.0
-    floor_px: float = 1.0
+    floor_px: float = 0.8
+    spread_sigmas: float = 5.0
     known_floor_px: float = 0.3
     grow_ratio: float = 0.5
     close_px: int = 5
@@ -86,7 +95,7 @@ class VelocityRayConfig:
         check_fields(
             self,
             positive=("noise_sigmas", "floor_px", "known_floor_px", "grow_ratio"),
-            non_negative=("close_px", "edge_px"),
+            non_negative=("close_px", "edge_px", "spread_sigmas"),
         )
         if self.grow_ratio > 1:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
@@ -169,6 +178,8 @@ class VelocityRayDetector:
             return DetectorOutput.empty(field.shape, camera=fit)
         floor = cfg.floor_px if known is None else cfg.known_floor_px
         tolerance = max(floor, cfg.noise_sigmas * fit.noise_px)
+        if known is None:
+            tolerance = max(tolerance, cfg.spread_sigmas * fit.spread_px)
         if known is not None:
             distance = known_ray_distance(field, known)
         else:

@@ -1,0 +1,142 @@
+"""Accuracy of the two 2-D velocity measurements on motions with known answers.
+
+    python benchmarks/velocity_accuracy.py
+
+A real photograph (skimage's astronaut) is moved by exact affine warps
+(translation, rotation about the centre, zoom about the centre) into
+320x320 frames, so the working resolution equals the input's and every
+velocity is known at every pixel. Two candidates (issue 13, item 1):
+
+* **DIS**: :class:`motiondetect.measurement.dense_flow.DenseFlow` with its
+  defaults, compared with the true velocity at every pixel 20 px or more
+  inside the frame;
+* **stages + Hough/least squares**: the paper's normal-flow stages and its
+  Hough step refined by least squares (:func:`~motiondetect.constraint_ray.hough.coarse_field`),
+  one velocity per 4x4 region, compared with the region's mean true velocity.
+
+Prints the median and 90th-percentile error (px/frame), the median error as a
+share of the speed, the share of regions (or pixels) with an answer, and the
+time per frame.
+"""
+
+from __future__ import annotations
+
+import time
+
+import cv2
+import numpy as np
+from skimage import data
+
+from motiondetect.constraint_ray.hough import coarse_field
+from motiondetect.measurement.dense_flow import DenseFlow
+from motiondetect.measurement.normal_flow import NormalFlowPipeline, StageConfig
+
+SIZE = 320
+BORDER = 20
+PHOTO = cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR)
+CENTRE = np.array([SIZE / 2, SIZE / 2])
+
+
+def camera(kind: str, amount: float, t: int) -> np.ndarray:
+    """3x3 map from frame pixels to photo pixels after ``t`` frames of motion."""
+    offset = np.array([[1, 0, 96.0], [0, 1, 96.0], [0, 0, 1]])
+    to_centre = np.array([[1, 0, -CENTRE[0]], [0, 1, -CENTRE[1]], [0, 0, 1]])
+    back = np.linalg.inv(to_centre)
+    if kind == "translation":  # the camera pans right: the scene moves left
+        move = np.array([[1, 0, amount * t], [0, 1, 0.0], [0, 0, 1]])
+    elif kind == "rotation":
+        a = np.deg2rad(amount * t)
+        move = back @ np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+        move = move @ to_centre
+    else:  # zoom out by ``amount`` per frame: the scene shrinks toward the centre
+        s = (1 + amount) ** t
+        move = back @ np.diag([s, s, 1.0]) @ to_centre
+    return offset @ move
+
+
+def frame(kind: str, amount: float, t: int) -> np.ndarray:
+    return cv2.warpPerspective(
+        PHOTO, camera(kind, amount, t), (SIZE, SIZE), flags=cv2.WARP_INVERSE_MAP | cv2.INTER_CUBIC
+    )
+
+
+def true_velocity(kind: str, amount: float, t: int) -> np.ndarray:
+    """(SIZE, SIZE, 2) velocity at frame t's pixels: x - (where x was in frame t-1)."""
+    yy, xx = np.mgrid[0:SIZE, 0:SIZE].astype(np.float64)
+    pts = np.stack([xx, yy, np.ones_like(xx)], -1) @ camera(kind, amount, t).T
+    before = pts @ np.linalg.inv(camera(kind, amount, t - 1)).T
+    before = before[..., :2] / before[..., 2:]
+    return np.stack([xx, yy], -1) - before
+
+
+def dis_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float, float]:
+    flow, field, spent = DenseFlow(), None, 0.0
+    for t in range(frames):
+        image = frame(kind, amount, t)
+        start = time.perf_counter()
+        field = flow.process(image)
+        spent += time.perf_counter() - start if t else 0.0
+    truth = true_velocity(kind, amount, frames - 1)
+    err = np.hypot(*(field.velocity_px - truth).transpose(2, 0, 1))[BORDER:-BORDER, BORDER:-BORDER]
+    speed = np.hypot(*truth.transpose(2, 0, 1))[BORDER:-BORDER, BORDER:-BORDER]
+    return err.ravel(), float(np.median(speed)), spent / (frames - 1)
+
+
+def hough_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float, float]:
+    pipeline = NormalFlowPipeline(StageConfig(work_size=SIZE))
+    field, spent = None, 0.0
+    for t in range(frames):
+        image = frame(kind, amount, t)
+        start = time.perf_counter()
+        field = pipeline.process(image)
+        coarse = coarse_field(field) if field is not None else None
+        spent += time.perf_counter() - start if t else 0.0
+    truth = true_velocity(kind, amount, frames - 1)
+    step = SIZE // 4
+    mean = truth.reshape(4, step, 4, step, 2).mean(axis=(1, 3))
+    known = coarse.known & coarse.moving
+    err = np.hypot(*(coarse.flow_px - mean).transpose(2, 0, 1))
+    err = np.where(known, err, np.inf)  # no answer counts as a miss
+    return err.ravel(), float(np.median(np.hypot(*mean.transpose(2, 0, 1)))), spent / (frames - 1)
+
+
+#: px/frame, off whole pixels (a whole-pixel shift copies pixels exactly);
+#: 40.5 and 50.5 lie past the band, to show where it ends.
+SPEEDS = (0.3, 0.7, 1.5, 3.5, 7.5, 15.5, 29.5, 40.5, 50.5)
+MOTIONS = [
+    *(("translation", s, f"translation {s:g} px/frame") for s in SPEEDS),
+    *(("rotation", a, f"rotation {a:g} deg/frame") for a in (0.5, 1, 2, 4)),
+    *(("zoom", z, f"zoom {100 * z:g} %/frame") for z in (0.005, 0.01, 0.02, 0.05)),
+]
+
+
+def row(label: str, median_speed: float, err: np.ndarray, ms: float) -> str:
+    answered = np.isfinite(err)
+    if not answered.any():
+        return f"| {label} | {median_speed:.2f} | - | - | - | 0 % | {ms:.1f} |"
+    e = err[answered]
+    med, p90 = float(np.median(e)), float(np.percentile(e, 90))
+    share = 100 * med / median_speed if median_speed else 0.0
+    return (
+        f"| {label} | {median_speed:.2f} | {med:.3f} | {p90:.3f} | {share:.1f} % "
+        f"| {100 * answered.mean():.0f} % | {ms:.1f} |"
+    )
+
+
+def main() -> None:
+    cv2.setNumThreads(1)
+    header = [
+        "| motion | median speed (px/frame) | median error | 90th pct error "
+        "| median error / speed | answered | ms/frame |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, measure in (("DIS (default)", dis_errors), ("stages + Hough/LS", hough_errors)):
+        print(f"\n**{name}**\n")
+        print("\n".join(header))
+        for kind, amount, label in MOTIONS:
+            err, speed, secs = measure(kind, amount)
+            print(row(label, speed, err, 1000 * secs), flush=True)
+
+
+if __name__ == "__main__":
+    main()
