@@ -15,13 +15,11 @@ velocity is known at every pixel. Two candidates (issue 13, item 1):
   one velocity per 4x4 region, compared with the region's mean true velocity.
 
 Prints the median and 90th-percentile error (px/frame), the median error as a
-share of the speed, the share of regions (or pixels) with an answer, and the
-time per frame.
+share of the speed, and the share of regions (or pixels) with an answer.
+Their speed is measured by ``benchmarks/throughput.py`` and ``benchmarks/stages.py``.
 """
 
 from __future__ import annotations
-
-import time
 
 import cv2
 import numpy as np
@@ -69,35 +67,28 @@ def true_velocity(kind: str, amount: float, t: int) -> np.ndarray:
     return np.stack([xx, yy], -1) - before
 
 
-def dis_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float, float]:
-    flow, field, spent = DenseFlow(), None, 0.0
+def dis_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float]:
+    flow = DenseFlow()
     for t in range(frames):
-        image = frame(kind, amount, t)
-        start = time.perf_counter()
-        field = flow.process(image)
-        spent += time.perf_counter() - start if t else 0.0
+        field = flow.process(frame(kind, amount, t))
     truth = true_velocity(kind, amount, frames - 1)
     err = np.hypot(*(field.velocity_px - truth).transpose(2, 0, 1))[BORDER:-BORDER, BORDER:-BORDER]
     speed = np.hypot(*truth.transpose(2, 0, 1))[BORDER:-BORDER, BORDER:-BORDER]
-    return err.ravel(), float(np.median(speed)), spent / (frames - 1)
+    return err.ravel(), float(np.median(speed))
 
 
-def hough_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float, float]:
+def hough_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float]:
     pipeline = NormalFlowPipeline(StageConfig(work_size=SIZE))
-    field, spent = None, 0.0
     for t in range(frames):
-        image = frame(kind, amount, t)
-        start = time.perf_counter()
-        field = pipeline.process(image)
-        coarse = coarse_field(field) if field is not None else None
-        spent += time.perf_counter() - start if t else 0.0
+        field = pipeline.process(frame(kind, amount, t))
+    coarse = coarse_field(field)
     truth = true_velocity(kind, amount, frames - 1)
     step = SIZE // 4
     mean = truth.reshape(4, step, 4, step, 2).mean(axis=(1, 3))
     known = coarse.known & coarse.moving
     err = np.hypot(*(coarse.flow_px - mean).transpose(2, 0, 1))
     err = np.where(known, err, np.inf)  # no answer counts as a miss
-    return err.ravel(), float(np.median(np.hypot(*mean.transpose(2, 0, 1)))), spent / (frames - 1)
+    return err.ravel(), float(np.median(np.hypot(*mean.transpose(2, 0, 1))))
 
 
 #: px/frame, off whole pixels (a whole-pixel shift copies pixels exactly);
@@ -110,16 +101,16 @@ MOTIONS = [
 ]
 
 
-def row(label: str, median_speed: float, err: np.ndarray, ms: float) -> str:
+def row(label: str, median_speed: float, err: np.ndarray) -> str:
     answered = np.isfinite(err)
     if not answered.any():
-        return f"| {label} | {median_speed:.2f} | - | - | - | 0 % | {ms:.1f} |"
+        return f"| {label} | {median_speed:.2f} | - | - | - | 0 % |"
     e = err[answered]
     med, p90 = float(np.median(e)), float(np.percentile(e, 90))
     share = 100 * med / median_speed if median_speed else 0.0
     return (
         f"| {label} | {median_speed:.2f} | {med:.3f} | {p90:.3f} | {share:.1f} % "
-        f"| {100 * answered.mean():.0f} % | {ms:.1f} |"
+        f"| {100 * answered.mean():.0f} % |"
     )
 
 
@@ -127,15 +118,15 @@ def main() -> None:
     cv2.setNumThreads(1)
     header = [
         "| motion | median speed (px/frame) | median error | 90th pct error "
-        "| median error / speed | answered | ms/frame |",
-        "|---|---|---|---|---|---|---|",
+        "| median error / speed | answered |",
+        "|---|---|---|---|---|---|",
     ]
     for name, measure in (("DIS (default)", dis_errors), ("stages + Hough/LS", hough_errors)):
         print(f"\n**{name}**\n")
         print("\n".join(header))
         for kind, amount, label in MOTIONS:
-            err, speed, secs = measure(kind, amount)
-            print(row(label, speed, err, 1000 * secs), flush=True)
+            err, speed = measure(kind, amount)
+            print(row(label, speed, err), flush=True)
 
 
 if __name__ == "__main__":
