@@ -113,9 +113,11 @@ def object_region(
     x0, y0, x1, y1 = obj.box
     bbox = [round(x0 * sx), round(y0 * sy), round((x1 - x0) * sx), round((y1 - y0) * sy)]
     cells = np.argwhere(cells_from_mask(obj.mask, share=1e-6))
-    found = tuple(n for n, out in outputs.items() if (out.mask & obj.mask).any())
-    strength = max(float(out.pixel_strength[obj.mask].mean()) for out in outputs.values())
-    area = round(float(obj.mask.sum()) * sx * sy)
+    inside = (slice(y0, y1), slice(x0, x1))  # the mask is empty outside its box
+    own = obj.mask[inside]
+    found = tuple(n for n, out in outputs.items() if (out.mask[inside] & own).any())
+    strength = max(float(out.pixel_strength[inside][own].mean()) for out in outputs.values())
+    area = round(float(own.sum()) * sx * sy)
     return Region(bbox, cells, area, strength, found, obj.track)
 
 

@@ -115,22 +115,27 @@ def group_objects(
         k = 2 * (config.gap_px // 2) + 1
         kernel = np.ones((k, k), np.uint8)
         joined = cv2.dilate(mask, kernel)
-    count, labels = cv2.connectedComponents(joined, connectivity=8)
-    labels = np.where(mask > 0, labels, 0)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
+    pad = 0 if kernel is None else kernel.shape[0]  # room for the closing inside the box
     min_area = config.min_area_share * h * w
     objects = []
     for label in range(1, count):
-        own = (labels == label).astype(np.uint8)
+        x, y, bw, bh = stats[label, :4]
+        x0, y0 = max(x - pad, 0), max(y - pad, 0)
+        x1, y1 = min(x + bw + pad, w), min(y + bh + pad, h)
+        own = (labels[y0:y1, x0:x1] == label).astype(np.uint8) & mask[y0:y1, x0:x1]
         if own.sum() < min_area:
             continue
         if kernel is not None:
             own = cv2.morphologyEx(own, cv2.MORPH_CLOSE, kernel)
         contours, _ = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         cv2.drawContours(own, contours, -1, 1, thickness=cv2.FILLED)
-        x, y, bw, bh = cv2.boundingRect(own)
-        filled = own > 0
-        v = velocity[filled].mean(axis=0)
-        objects.append(MovingObject(filled, (x, y, x + bw, y + bh), (float(v[0]), float(v[1]))))
+        bx, by, bw, bh = cv2.boundingRect(own)
+        filled = np.zeros((h, w), bool)
+        filled[y0:y1, x0:x1] = own > 0
+        v = velocity[y0:y1, x0:x1][own > 0].mean(axis=0)
+        box = (int(x0 + bx), int(y0 + by), int(x0 + bx + bw), int(y0 + by + bh))
+        objects.append(MovingObject(filled, box, (float(v[0]), float(v[1]))))
     objects.sort(key=lambda o: -(o.box[2] - o.box[0]) * (o.box[3] - o.box[1]))
     return objects
 
