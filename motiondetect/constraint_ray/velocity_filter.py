@@ -185,10 +185,12 @@ class VelocityRayDetector:
         else:
             distance = off_ray(fit.residual_px, field.pixel_grid, fit.epipole)
         distance = without_frame_edge(distance, cfg.edge_px + fit.median_speed_px)
-        seeds = None
+        seeds = distance > tolerance
+        if field.tracked is not None:
+            seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)
         if cfg.evidence_sigmas > 0 and known is None and fit.plane_difference is not None:
             changed = image_changed(fit.plane_difference, cfg.evidence_sigmas, cfg.evidence_box)
-            seeds = (distance > tolerance) & changed
+            seeds &= changed
         mask = hysteresis(distance, tolerance, cfg.grow_ratio, seeds)
         if cfg.close_px > 1:
             kernel = np.ones((cfg.close_px, cfg.close_px), np.uint8)

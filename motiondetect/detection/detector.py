@@ -205,7 +205,8 @@ class MotionDetector:
         fit = fit_camera(flow, self.fit_config, self._epipole, reference)
         self._sharpness.append(sharpness(flow.grey))
         self._epipole = fit.epipole
-        flow = dataclasses.replace(flow, camera=fit)
+        tracked = self.tracker.predicted_mask(flow.shape) if self.tracker.config.prior else None
+        flow = dataclasses.replace(flow, camera=fit, tracked=tracked)
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         judged = [out.camera for out in outputs.values() if out.camera is not None]
         camera = judged[0] if judged else fit

@@ -10,6 +10,8 @@
    overlaps most. Tracks keep a stable integer id.
 3. **Persist.** An object is reported once its track has been seen on
    ``persistence`` frames; a track survives ``max_missed`` frames unseen.
+4. **Expect** (optional, ``prior``). Where a confirmed track is predicted,
+   the constraint ray needs less evidence to seed.
 """
 
 from __future__ import annotations
@@ -47,6 +49,12 @@ class TrackConfig:
         at the mover.
     support_px : int
         Reach of that image change, work px (half of DIS's 8-px patch).
+    prior : bool
+        Inside a confirmed track's predicted box, a constraint-ray seed needs
+        only the growth threshold (``grow_ratio`` of the tolerance): a
+        mover that slows keeps being found where it is expected. Off by
+        default: a false track (rigid parallax) feeds itself the same way
+        (docs/detectors.md measures both).
     """
 
     gap_px: int = 10
@@ -56,6 +64,7 @@ class TrackConfig:
     min_iou: float = 0.1
     support_sigmas: float = 3.0
     support_px: int = 4
+    prior: bool = False
 
     def __post_init__(self) -> None:
         check_fields(
@@ -179,6 +188,19 @@ class Tracker:
         for track in self._tracks:
             track.missed += 1
         self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
+
+    def predicted_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
+        """Where the confirmed tracks should be now: their boxes moved by their
+        own velocity, (h, w) bool; None without any."""
+        confirmed = [t for t in self._tracks if t.age >= self.config.persistence]
+        if not confirmed:
+            return None
+        mask = np.zeros(shape, bool)
+        for track in confirmed:
+            x0, y0, x1, y1 = track.predicted()
+            rows = slice(max(int(y0), 0), max(int(np.ceil(y1)), 0))
+            mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
+        return mask
 
     def update(self, objects: list[MovingObject]) -> list[MovingObject]:
         """Match this frame's objects to tracks; return the confirmed ones with ids."""

@@ -84,6 +84,8 @@ class VelocityField:
     camera : CameraFit, optional
         The observer motion fitted to this field, attached once per frame
         so that every detector shares it.
+    tracked : (h, w) ndarray of bool, optional
+        Where the confirmed tracks are predicted to be in this frame.
     """
 
     velocity_px: np.ndarray
@@ -92,6 +94,7 @@ class VelocityField:
     geometry: GridGeometry
     pixel_grid: np.ndarray
     camera: Any = None
+    tracked: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
