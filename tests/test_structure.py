@@ -120,3 +120,12 @@ def test_wrong_types_in_the_config_file_get_one_line(tmp_path):
     (tmp_path / "d.toml").write_text('[track]\ngap_px = "wide"\n[nonsense]\nx = 1\n')
     with pytest.raises(SettingsError, match="unknown key 'nonsense'"):
         load_config_file(tmp_path / "d.toml")
+
+
+@pytest.mark.parametrize(("section", "name"), [("track", "prior"), ("fit", "parallax")])
+def test_switches_in_the_config_file_must_be_true_or_false(tmp_path, section, name):
+    (tmp_path / "c.toml").write_text(f"[{section}]\n{name} = 3\n")
+    with pytest.raises(SettingsError, match=f"\\[{section}\\] {name} must be true or false"):
+        make_settings(load_config_file(tmp_path / "c.toml"))
+    (tmp_path / "d.toml").write_text(f"[{section}]\n{name} = true\n")
+    assert getattr(make_settings(load_config_file(tmp_path / "d.toml")).configs[section], name)

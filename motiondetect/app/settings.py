@@ -300,6 +300,10 @@ def _build_configs(values: dict, measure: str, work_size: int | None) -> dict:
         fields[_WORK_SIZE[measure]]["work_size"] = work_size
     configs = {}
     for section, cls in SECTIONS.items():
+        hints = typing.get_type_hints(cls)
+        for name, value in fields[section].items():
+            if hints.get(name) is bool and not isinstance(value, bool):
+                raise SettingsError(f"[{section}] {name} must be true or false, but got {value!r}")
         try:
             configs[section] = cls(**fields[section])
         except TypeError as exc:
