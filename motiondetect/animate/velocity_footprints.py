@@ -30,7 +30,7 @@ import numpy as np
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
 from motiondetect.detection.base import DetectorOutput
-from motiondetect.detection.regions import hysteresis
+from motiondetect.detection.regions import hysteresis, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-animate"
@@ -215,6 +215,9 @@ class VelocityAnimateDetector:
             return DetectorOutput.empty(field.shape, camera=fit)
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
         violation = violations(field, fit.residual_px, previous, tolerance, cfg)
+        # The test reads two flow fields (this one and, where each point came
+        # from, the previous one), each extrapolated along the frame edge.
+        violation = without_frame_edge(violation, 2 * fit.edge_band_px)
         animate = self._remember(violation, field)
         speed = np.hypot(fit.residual_px[..., 0], fit.residual_px[..., 1])
         mask = hysteresis(speed, tolerance, 1.0, seeds=animate)

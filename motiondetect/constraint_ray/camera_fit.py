@@ -73,6 +73,10 @@ class FitConfig:
         blurred (a fast turn, a shake): its flow cannot be trusted. 0: off.
     blur_history : int
         Frames the sharpness reference is the median of.
+    edge_px : float
+        Width of the band along the frame edge where content enters or
+        leaves and the flow is extrapolated, work px, on top of the frame's
+        median speed (``CameraFit.edge_band_px``); detectors do not test it.
     parallax : bool
         Fit an epipole and test only the residual across each point's ray.
         Off by default: measured on every data set, the fitted epipole was
@@ -92,6 +96,7 @@ class FitConfig:
     max_flagged_share: float = 1.0
     blur_ratio: float = 1.0 / 3.0
     blur_history: int = 30
+    edge_px: float = 4.0
     parallax: bool = False
 
     def __post_init__(self) -> None:
@@ -110,6 +115,7 @@ class FitConfig:
                 "min_parallax_blocks",
                 "max_flagged_share",
                 "blur_ratio",
+                "edge_px",
             ),
         )
         if self.min_inlier_share >= 1:
@@ -144,6 +150,9 @@ class CameraFit:
         Robust sigma of the plane residual over the whole frame (inliers or
         not), work px/frame: the noise plus the rigid parallax the plane
         leaves (movers are a minority of the samples, so the median ignores them).
+    edge_band_px : float
+        ``FitConfig.edge_px`` plus the median speed: the band along the
+        frame edge where this frame's flow is extrapolated, work px.
     """
 
     homography: np.ndarray | None
@@ -155,6 +164,7 @@ class CameraFit:
     median_speed_px: float = 0.0
     plane_difference: np.ndarray | None = None
     spread_px: float = 0.0
+    edge_band_px: float = 0.0
 
     @property
     def reliable(self) -> bool:
@@ -311,4 +321,7 @@ def fit_camera(
             previous_epipole,
         )
     spread = float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if len(magnitude) else 0.0
-    return CameraFit(homography, residual, noise, share, epipole, "", speed, difference, spread)
+    return CameraFit(
+        homography, residual, noise, share, epipole, "", speed, difference, spread,
+        config.edge_px + speed,
+    )  # fmt: skip

@@ -36,7 +36,7 @@ from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_cam
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DetectorOutput
-from motiondetect.detection.regions import hysteresis
+from motiondetect.detection.regions import hysteresis, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-ray"
@@ -69,9 +69,6 @@ class VelocityRayConfig:
         least this share of the tolerance.
     close_px : int
         Morphological closing that joins the fragments of one mover, work px.
-    edge_px : float
-        Width of the untested band along the frame edge, work px, on top of
-        the frame's median speed.
     evidence_sigmas : float
         A seed must also show a grey-level change after the plane warp: its
         local mean above this many robust sigmas of the frame's changes (0: off).
@@ -87,7 +84,6 @@ class VelocityRayConfig:
     known_floor_px: float = 0.3
     grow_ratio: float = 0.5
     close_px: int = 5
-    edge_px: float = 4.0
     evidence_sigmas: float = 3.0
     evidence_box: int = 5
 
@@ -95,7 +91,7 @@ class VelocityRayConfig:
         check_fields(
             self,
             positive=("noise_sigmas", "floor_px", "known_floor_px", "grow_ratio"),
-            non_negative=("close_px", "edge_px", "spread_sigmas"),
+            non_negative=("close_px", "spread_sigmas"),
         )
         if self.grow_ratio > 1:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
@@ -127,21 +123,6 @@ def known_ray_distance(field: VelocityField, model: ObserverMotion) -> np.ndarra
     start = cv2.resize(model.rotation_px, (w, h), interpolation=cv2.INTER_LINEAR)
     step = cv2.resize(model.translation_px, (w, h), interpolation=cv2.INTER_LINEAR)
     return distance_to_segment(field.velocity_px, start, step, model.depth_bound)
-
-
-def without_frame_edge(distance: np.ndarray, band_px: float) -> np.ndarray:
-    """Zero the band along the frame edge where content enters or leaves.
-
-    There the flow has no previous pixels to match and is extrapolated, so
-    its residual says nothing about independent motion (the normal-flow
-    detectors drop a border ring of cells for the same reason).
-    """
-    b = int(np.ceil(band_px))
-    if b <= 0:
-        return distance
-    out = distance.copy()
-    out[:b], out[-b:], out[:, :b], out[:, -b:] = 0, 0, 0, 0
-    return out
 
 
 class VelocityRayDetector:
@@ -184,7 +165,7 @@ class VelocityRayDetector:
             distance = known_ray_distance(field, known)
         else:
             distance = off_ray(fit.residual_px, field.pixel_grid, fit.epipole)
-        distance = without_frame_edge(distance, cfg.edge_px + fit.median_speed_px)
+        distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
         if field.tracked is not None:
             seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)

@@ -131,3 +131,18 @@ def hysteresis(
     keep[np.unique(labels[strong > 0])] = True
     keep[0] = False
     return keep[labels]
+
+
+def without_frame_edge(distance: np.ndarray, band_px: float) -> np.ndarray:
+    """Zero (or clear) the band along the frame edge where content enters or leaves.
+
+    There the flow has no previous pixels to match and is extrapolated, so
+    its residual says nothing about independent motion (the normal-flow
+    detectors drop a border ring of cells for the same reason).
+    """
+    b = int(np.ceil(band_px))
+    if b <= 0:
+        return distance
+    out = distance.copy()
+    out[:b], out[-b:], out[:, :b], out[:, -b:] = 0, 0, 0, 0
+    return out
