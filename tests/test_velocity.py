@@ -84,6 +84,9 @@ def test_a_cut_is_unreliable_and_flags_nothing():
     result = md.process(other, 1, 0.03)
     assert not result.reliable and result.reason in ("cut", "too few inliers")
     assert result.regions == [] and not result.flagged.any()
+    # Known ego-motion can still judge such a frame: the frame-edge band stays.
+    fit = result.camera
+    assert fit.edge_band_px == pytest.approx(FitConfig().edge_px + fit.median_speed_px)
 
 
 def test_off_ray_measures_across_the_line_to_the_epipole():

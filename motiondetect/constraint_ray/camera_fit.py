@@ -303,7 +303,9 @@ def fit_camera(
     )
     reason = _reason(homography, share, speed, cut, blurred, config)
     if reason:
-        return CameraFit(homography, None, 0.0, share, None, reason, speed)
+        return CameraFit(
+            homography, None, 0.0, share, None, reason, speed, edge_band_px=config.edge_px + speed
+        )
     residual = plane_residual(field, homography)
     step = config.sample_step_px
     sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)

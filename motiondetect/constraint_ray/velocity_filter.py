@@ -20,12 +20,13 @@ plane's inliers, ``spread_sigmas`` robust sigmas of the whole frame's
 residual, which carries its rigid parallax, and at least ``floor_px``).
 Flagged points are grown by hysteresis over their neighbours that lie off
 the ray by half as much, so a mover is found whole rather than at its
-strongest edges. Movers that travel *along*
-their ray are invisible to this test (the blind spot, section 3.3).
+strongest edges. Movers that travel *along* their ray are invisible to
+this test (the blind spot, section 3.3).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import cv2
@@ -209,4 +210,4 @@ def _with_known(fit: CameraFit, known: ObserverMotion | None) -> CameraFit:
     """A fit that known ego-motion made reliable keeps its numbers but no reason."""
     if known is None or fit.reliable:
         return fit
-    return CameraFit(fit.homography, fit.residual_px, fit.noise_px, 1.0, None, "", 0.0)
+    return dataclasses.replace(fit, inlier_share=1.0, epipole=None, reason="", median_speed_px=0.0)
