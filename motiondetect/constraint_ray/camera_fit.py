@@ -265,6 +265,14 @@ def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     return ""
 
 
+def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray:
+    """``|grey - previous grey warped by the plane|``, (h, w) uint8 grey levels."""
+    h, w = field.shape
+    flags = cv2.WARP_INVERSE_MAP
+    warped = cv2.warpPerspective(field.previous_grey, homography, (w, h), flags=flags)
+    return cv2.absdiff(warped, field.grey)
+
+
 def fit_camera(
     field: VelocityField,
     config: FitConfig,
@@ -290,14 +298,8 @@ def fit_camera(
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
     homography, inliers = fit_homography(points, velocity, config.ransac_px)
     share = float(inliers.mean()) if len(inliers) else 0.0
-    cut, difference = 0.0, None
-    if homography is not None:
-        h, w = field.shape
-        warped = cv2.warpPerspective(
-            field.previous_grey, homography, (w, h), flags=cv2.WARP_INVERSE_MAP
-        )
-        difference = cv2.absdiff(warped, field.grey)
-        cut = float(difference[8:-8, 8:-8].mean())
+    difference = None if homography is None else plane_difference(field, homography)
+    cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
     blurred = reference_sharpness is not None and (
         sharpness(field.grey) < config.blur_ratio * reference_sharpness
     )
