@@ -219,12 +219,13 @@ def test_most_of_the_frame_off_the_fit_can_mark_a_frame_unreliable():
 
 
 def test_image_changed_finds_a_change_and_ignores_noise():
-    from motiondetect.constraint_ray.velocity_filter import image_changed
+    from motiondetect.constraint_ray.camera_fit import CameraFit
 
     rng = np.random.default_rng(3)
     diff = np.abs(rng.normal(0, 3.0, (120, 160))).astype(np.uint8)  # the plane explains all
     diff[40:70, 60:100] += 30  # a mover changed the image here
-    changed = image_changed(diff, 3.0, 5)
+    fit = CameraFit(None, None, 0.0, 1.0, None, plane_difference=diff)
+    changed = fit.image_changed(3.0, 5)
     assert changed[45:65, 65:95].all()
     outside = np.ones_like(changed)
     outside[35:75, 55:105] = False

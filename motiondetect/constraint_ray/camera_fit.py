@@ -33,6 +33,8 @@ from motiondetect.measurement.dense_flow import VelocityField
 
 #: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
 _MEDIAN_TO_SIGMA = 1.0 / np.sqrt(2.0 * np.log(2.0))
+#: Gaussian 1-D noise: median |x| = sigma / 1.4826.
+_ABS_MEDIAN_TO_SIGMA = 1.4826
 #: Median speed below which a frame without parallax counts as static, px/frame.
 STATIC_SPEED_PX = 0.3
 
@@ -153,6 +155,11 @@ class CameraFit:
     edge_band_px : float
         ``FitConfig.edge_px`` plus the median speed: the band along the
         frame edge where this frame's flow is extrapolated, work px.
+    change_noise : float or None
+        :func:`difference_noise` of ``plane_difference``, grey levels
+        (measured once per frame; None: measured when first needed).
+    sharpness : float
+        :func:`sharpness` of this frame.
     """
 
     homography: np.ndarray | None
@@ -165,6 +172,17 @@ class CameraFit:
     plane_difference: np.ndarray | None = None
     spread_px: float = 0.0
     edge_band_px: float = 0.0
+    change_noise: float | None = None
+    sharpness: float = 0.0
+
+    def image_changed(self, sigmas: float, box: int) -> np.ndarray:
+        """Where the image changed beyond noise once the camera's motion is
+        undone: the ``box``-px mean of ``plane_difference`` above ``sigmas``
+        times ``change_noise``, (h, w) bool."""
+        noise = self.change_noise
+        if noise is None:
+            noise = difference_noise(self.plane_difference)
+        return cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
 
     @property
     def reliable(self) -> bool:
@@ -273,6 +291,15 @@ def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray
     return cv2.absdiff(warped, field.grey)
 
 
+def difference_noise(difference: np.ndarray) -> float:
+    """Robust sigma of a (h, w) uint8 difference image plus one grey level of
+    quantisation, grey levels: most of a frame is explained by the plane, so
+    the median difference is its noise (found by histogram)."""
+    counts = np.bincount(difference.ravel(), minlength=256)
+    median = int(np.searchsorted(np.cumsum(counts), difference.size / 2))
+    return median * _ABS_MEDIAN_TO_SIGMA + 1.0
+
+
 def fit_camera(
     field: VelocityField,
     config: FitConfig,
@@ -300,13 +327,13 @@ def fit_camera(
     share = float(inliers.mean()) if len(inliers) else 0.0
     difference = None if homography is None else plane_difference(field, homography)
     cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
-    blurred = reference_sharpness is not None and (
-        sharpness(field.grey) < config.blur_ratio * reference_sharpness
-    )
+    sharp = sharpness(field.grey)
+    blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
     reason = _reason(homography, share, speed, cut, blurred, config)
+    edge = config.edge_px + speed
     if reason:
         return CameraFit(
-            homography, None, 0.0, share, None, reason, speed, edge_band_px=config.edge_px + speed
+            homography, None, 0.0, share, None, reason, speed, edge_band_px=edge, sharpness=sharp
         )
     residual = plane_residual(field, homography)
     step = config.sample_step_px
@@ -326,6 +353,6 @@ def fit_camera(
         )
     spread = float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if len(magnitude) else 0.0
     return CameraFit(
-        homography, residual, noise, share, epipole, "", speed, difference, spread,
-        config.edge_px + speed,
+        homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
+        difference_noise(difference), sharp,
     )  # fmt: skip

@@ -43,9 +43,6 @@ from motiondetect.measurement.dense_flow import VelocityField
 NAME = "velocity-ray"
 
 
-_ABS_MEDIAN_TO_SIGMA = 1.4826  # sigma of a normal variable from the median of its |value|
-
-
 @dataclass(frozen=True)
 class VelocityRayConfig:
     """Settings of the velocity-space constraint ray filter.
@@ -171,7 +168,7 @@ class VelocityRayDetector:
         if field.tracked is not None:
             seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)
         if cfg.evidence_sigmas > 0 and known is None and fit.plane_difference is not None:
-            changed = image_changed(fit.plane_difference, cfg.evidence_sigmas, cfg.evidence_box)
+            changed = fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
             seeds &= changed
         mask = hysteresis(distance, tolerance, cfg.grow_ratio, seeds)
         if cfg.close_px > 1:
@@ -181,29 +178,6 @@ class VelocityRayDetector:
         return DetectorOutput.from_mask(
             mask, strength, camera=_with_known(fit, known), observer=known
         )
-
-
-def image_changed(difference: np.ndarray, sigmas: float, box: int) -> np.ndarray:
-    """Where the image changed beyond noise once the camera's motion is undone.
-
-    Parameters
-    ----------
-    difference : (h, w) ndarray of uint8
-        ``CameraFit.plane_difference``, grey levels.
-    sigmas : float
-        Threshold in robust sigmas of the frame's differences (most of a
-        frame is explained by the plane, so their median is its noise).
-    box : int
-        Side of the averaging box, px.
-
-    Returns
-    -------
-    (h, w) ndarray of bool
-    """
-    counts = np.bincount(difference.ravel(), minlength=256)
-    median = int(np.searchsorted(np.cumsum(counts), difference.size / 2))
-    noise = median * _ABS_MEDIAN_TO_SIGMA + 1.0  # + one grey level of quantisation
-    return cv2.blur(difference, (box, box)) > sigmas * noise
 
 
 def _with_known(fit: CameraFit, known: ObserverMotion | None) -> CameraFit:

@@ -21,10 +21,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera, sharpness
+from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
-from motiondetect.constraint_ray.velocity_filter import image_changed
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
@@ -203,7 +202,7 @@ class MotionDetector:
     def _velocity_frame(self, flow: VelocityField, index: int, time_s: float) -> FrameResult:
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         fit = fit_camera(flow, self.fit_config, self._epipole, reference)
-        self._sharpness.append(sharpness(flow.grey))
+        self._sharpness.append(fit.sharpness)
         self._epipole = fit.epipole
         tracked = self.tracker.predicted_mask(flow.shape) if self.tracker.config.prior else None
         flow = dataclasses.replace(flow, camera=fit, tracked=tracked)
@@ -217,7 +216,7 @@ class MotionDetector:
         track = self.tracker.config
         changed = None
         if track.support_sigmas > 0 and fit.plane_difference is not None:
-            changed = image_changed(fit.plane_difference, track.support_sigmas, _CHANGE_BOX)
+            changed = fit.image_changed(track.support_sigmas, _CHANGE_BOX)
         objects = group_objects(union, flow.velocity_px, track, changed)
         covered = sum(float(o.mask.mean()) for o in objects)
         reason = camera.reason
