@@ -4,6 +4,7 @@
     python benchmarks/throughput.py --memory        # peak RSS, long vs short 1080p video
     python benchmarks/throughput.py --batch         # --jobs 2 against --jobs 1
     python benchmarks/throughput.py --encode        # writing the annotated video, per preset
+    python benchmarks/throughput.py --ahead         # measuring ahead on a 2nd thread vs serial
 
 Speed: ``detect`` end to end (decode included) in several variants, and in
 the same run on the same file decode-only and OpenCV MOG2 per frame. Each
@@ -251,6 +252,35 @@ def real(tmp: Path) -> None:
         print(line)
 
 
+def ahead(clip: Path, tmp: Path, repeat: int) -> None:
+    """Default threads: detect with the next frame measured on a second thread
+    (``MotionDetector.stream``) against the serial loop, and MOG2, same run."""
+    from motiondetect.detection.detector import MotionDetector
+
+    threaded = MotionDetector.stream
+
+    def serial(self, frames):
+        for f in frames:
+            yield f, self.process(f.image, f.index, f.time_s)
+
+    print(f"{clip.name}, default threads (cv2 threads = {cv2.getNumThreads()}), frames/s:")
+    for _ in range(repeat):
+        t = time.perf_counter()
+        mog = mog2_on(clip) / (time.perf_counter() - t)
+        line = f"  MOG2 {mog:.1f}"
+        for label, stream in (("serial", serial), ("ahead", threaded)):
+            MotionDetector.stream = stream
+            try:
+                for video in (False, True):
+                    t = time.perf_counter()
+                    n = run_detect(clip, tmp / "ahead", video=video, timeline=False)
+                    fps = n / (time.perf_counter() - t)
+                    line += f" | {label}{', H.264' if video else ''} {fps:.1f} ({fps / mog:.2f}x)"
+            finally:
+                MotionDetector.stream = threaded
+        print(line)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -265,6 +295,7 @@ def main() -> None:
     parser.add_argument("--real", action="store_true", help="whole processes on real clips")
     parser.add_argument("--quick", action="store_true", help="512x512 only")
     parser.add_argument("--encode", action="store_true", help="video writing cost per preset")
+    parser.add_argument("--ahead", action="store_true", help="measuring ahead against serial")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
@@ -276,6 +307,11 @@ def main() -> None:
             return
         if args.real:
             real(tmp)
+            return
+        if args.ahead:
+            clips = [make_pan_clip(tmp / "clip512.mp4", (512, 512), args.frames)]
+            for clip in clips + real_clips(tmp)[:1]:
+                ahead(clip, tmp, args.repeat)
             return
         if args.encode:
             encode_cost(make_pan_clip(tmp / "clip512.mp4", (512, 512), args.frames), tmp)

@@ -30,6 +30,7 @@ logging.getLogger("motiondetect").addHandler(logging.NullHandler())
 from motiondetect.detection.base import Detector, DetectorOutput, registry  # noqa: E402
 from motiondetect.detection.detector import FrameResult, MotionDetector  # noqa: E402
 from motiondetect.detection.regions import Region  # noqa: E402
+from motiondetect.io.source import SourceFrame  # noqa: E402
 from motiondetect.io.video import FrameSource, VideoError, VideoInfo, open_source  # noqa: E402
 
 __all__ = [
@@ -76,8 +77,9 @@ def detect(
     md = MotionDetector(detector, *configs, measure=measure, persistence=persistence)
     if isinstance(source, (str, Path)):
         with open_source(source) as frames:
-            for frame in frames:
-                yield md.process(frame.image, frame.index, frame.time_s)
+            for _, result in md.stream(frames):
+                yield result
         return
-    for index, image in enumerate(source):
-        yield md.process(image, index, index / fps)
+    in_memory = (SourceFrame(i, i / fps, image) for i, image in enumerate(source))
+    for _, result in md.stream(in_memory):
+        yield result

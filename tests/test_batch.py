@@ -42,18 +42,19 @@ def invoke(*args):
     return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
 
 
-def test_any_exception_is_one_inputs_failure_and_the_batch_goes_on(tmp_path, monkeypatch):
+@pytest.mark.parametrize("half", ["measure_frame", "judge"])  # the measuring thread, or this one
+def test_any_exception_is_one_inputs_failure_and_the_batch_goes_on(tmp_path, monkeypatch, half):
     good, bad = video(tmp_path / "good.mp4"), video(tmp_path / "bad.mp4", seed=1)
     from motiondetect.detection import detector
 
-    real = detector.MotionDetector.process
+    real = getattr(detector.MotionDetector, half)
 
-    def broken(self, frame, index, time_s):
+    def broken(self, *args):
         if self.__dict__.setdefault("_calls", 0) == 0 and "bad" in str(os.environ.get("WHICH")):
             raise RuntimeError("a bug")
-        return real(self, frame, index, time_s)
+        return real(self, *args)
 
-    monkeypatch.setattr(detector.MotionDetector, "process", broken)
+    monkeypatch.setattr(detector.MotionDetector, half, broken)
     settings = make_settings({"output": tmp_path / "o", "video": False})
     monkeypatch.setenv("WHICH", "bad")
     failed = process_input(InputJob(bad, "bad"), settings)

@@ -7,6 +7,7 @@ pasted as movers, so every answer is known.
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import cv2
@@ -19,6 +20,7 @@ from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, distance_to_segment
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker
+from motiondetect.io.source import SourceFrame
 from motiondetect.io.video import open_source, read_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig
 from motiondetect.tools.evaluate import Counts, score_frame
@@ -356,3 +358,36 @@ def test_animate_skips_the_frame_edge_of_both_flow_fields():
     without = _animate_on_sample("pan_blindspot", 0.0)
     assert with_band[0] <= 0.8 and without[0] >= 1.0  # measured 0.66 and 1.26
     assert with_band[1] == pytest.approx(without[1])
+
+
+def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch):
+    from .scenes import scene
+
+    frames = scene("pan", ("smooth", "animate"), frames=16)
+    serial = MotionDetector("both")
+    expected = [serial.process(fr.image, fr.index, fr.index / 30) for fr in frames]
+    threads = set()
+    ahead = MotionDetector("both")
+    measure = ahead.measure_frame
+
+    def measure_and_note(image):
+        threads.add(threading.current_thread().name)
+        return measure(image)
+
+    monkeypatch.setattr(ahead, "measure_frame", measure_and_note)
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        source = (SourceFrame(fr.index, fr.index / 30, fr.image) for fr in frames)
+        streamed = list(ahead.stream(source))
+    finally:
+        cv2.setNumThreads(before)
+    assert threads and all(name.startswith("measure") for name in threads)
+    assert [f.index for f, _ in streamed] == [fr.index for fr in frames]
+    assert sum(len(r.regions) for r in expected) > 0
+    for want, (_, got) in zip(expected, streamed, strict=True):
+        assert [r.bbox for r in got.regions] == [r.bbox for r in want.regions]
+        assert [r.track for r in got.regions] == [r.track for r in want.regions]
+        assert got.reason == want.reason
+        if want.mask is not None:
+            assert np.array_equal(got.mask, want.mask)

@@ -12,6 +12,7 @@ import json
 import logging
 import shutil
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from motiondetect.app.clips import extract_clips, write_thumbnails
@@ -208,6 +209,18 @@ class _FrameWriters:
                 self.sink.close(keep=ok)
 
 
+def _frames_in_range(source: FrameSource, settings: Settings) -> Iterator[SourceFrame]:
+    """The frames of ``--start``/``--end``, until Ctrl-C stops a stream."""
+    for frame in source:
+        if STREAM_STOP.code and not source.seekable:
+            return  # Ctrl-C on a stream: close it with complete outputs
+        before, past = settings.in_range(frame.index, frame.time_s)
+        if past:
+            return
+        if not before:
+            yield frame
+
+
 def _detect_frames(
     source: FrameSource, writers: _FrameWriters, settings: Settings, progress: Progress | None
 ) -> tuple[EventTimeline, int]:
@@ -216,15 +229,7 @@ def _detect_frames(
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections = EventTimeline(), 0
-    for frame in source:
-        if STREAM_STOP.code and not source.seekable:
-            break  # Ctrl-C on a stream: close it with complete outputs
-        before, past = settings.in_range(frame.index, frame.time_s)
-        if past:
-            break
-        if before:
-            continue
-        result = detector.process(frame.image, frame.index, frame.time_s)
+    for frame, result in detector.stream(_frames_in_range(source, settings)):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])

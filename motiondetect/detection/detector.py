@@ -16,7 +16,10 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -31,6 +34,7 @@ from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, Velo
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.stages import GRID
 
+F = TypeVar("F")
 _GROW = np.ones((3, 3), np.uint8)
 _CHANGE_BOX = 3  # px averaged when testing an image change for object support
 
@@ -185,7 +189,45 @@ class MotionDetector:
 
     def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
         """Run one frame through the measurement and the detectors."""
-        flow = self.pipeline.process(frame)
+        return self.judge(self.measure_frame(frame), index, time_s)
+
+    def stream(self, frames: Iterable[F]) -> Iterator[tuple[F, FrameResult]]:
+        """Each frame (anything with ``image``, ``index`` and ``time_s``) with its result.
+
+        When OpenCV may use more than one thread (``cv2.getNumThreads()``),
+        the next frame is read and measured on a second thread while this
+        one is judged: the results are those of :meth:`process`, in order.
+        Reading ``frames`` then happens on that thread too.
+        """
+        if cv2.getNumThreads() <= 1:
+            for frame in frames:
+                yield frame, self.process(frame.image, frame.index, frame.time_s)
+            return
+        items = iter(frames)
+
+        def read_and_measure():
+            frame = next(items, None)
+            return None if frame is None else (frame, self.measure_frame(frame.image))
+
+        with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
+            pending = ahead.submit(read_and_measure)
+            while (got := pending.result()) is not None:
+                pending = ahead.submit(read_and_measure)
+                frame, flow = got
+                yield frame, self.judge(flow, frame.index, frame.time_s)
+
+    def measure_frame(self, frame: np.ndarray) -> object | None:
+        """The first half of :meth:`process`: the frame's measurement alone.
+
+        It depends only on the frames measured before, so the next frame's
+        can run on another thread while :meth:`judge` handles this one
+        (:meth:`stream`). None for the first frame.
+        """
+        return self.pipeline.process(frame)
+
+    def judge(self, flow: object | None, index: int, time_s: float) -> FrameResult:
+        """The second half of :meth:`process`: detectors, fusion and objects
+        on a measurement from :meth:`measure_frame`, given in frame order."""
         if flow is None:
             empty = np.zeros((GRID, GRID), bool)
             return FrameResult(index, time_s, [], empty, None, None, None)
