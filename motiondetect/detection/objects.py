@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
+from motiondetect.detection.regions import components_with_stats
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,7 @@ def group_objects(
         k = 2 * (config.gap_px // 2) + 1
         kernel = np.ones((k, k), np.uint8)
         joined = cv2.dilate(mask, kernel)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
+    count, labels, stats = components_with_stats(joined)
     pad = 0 if kernel is None else kernel.shape[0]  # room for the closing inside the box
     min_area = config.min_area_share * h * w
     objects = []

