@@ -300,6 +300,12 @@ def difference_noise(difference: np.ndarray) -> float:
     return median * _ABS_MEDIAN_TO_SIGMA + 1.0
 
 
+def residual_spread(magnitude: np.ndarray) -> float:
+    """Robust sigma of residual vectors from their lengths (any shape): the
+    median of a 2-D Gaussian's length over sqrt(2 ln 2). 0 when empty."""
+    return float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if magnitude.size else 0.0
+
+
 def fit_camera(
     field: VelocityField,
     config: FitConfig,
@@ -351,7 +357,7 @@ def fit_camera(
             config.min_parallax_blocks,
             previous_epipole,
         )
-    spread = float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if len(magnitude) else 0.0
+    spread = residual_spread(magnitude)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         difference_noise(difference), sharp,

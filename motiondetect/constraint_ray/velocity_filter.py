@@ -22,6 +22,10 @@ Flagged points are grown by hysteresis over their neighbours that lie off
 the ray by half as much, so a mover is found whole rather than at its
 strongest edges. Movers that travel *along* their ray are invisible to
 this test (the blind spot, section 3.3).
+
+Movers slower than one frame's tolerance are found on the residual summed
+over frames along the motion (``carry``, ``slow_px``; not in the paper,
+docs/detectors.md): a steady motion adds up, independent noise much less.
 """
 
 from __future__ import annotations
@@ -33,7 +37,12 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import (
+    CameraFit,
+    FitConfig,
+    fit_camera,
+    residual_spread,
+)
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DetectorOutput
@@ -41,6 +50,7 @@ from motiondetect.detection.regions import hysteresis, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-ray"
+_SPREAD_STEP = 8  # px between the samples the summed field's spread is measured on
 
 
 @dataclass(frozen=True)
@@ -74,6 +84,15 @@ class VelocityRayConfig:
         changes the image where it is.
     evidence_box : int
         Side of the box the change is averaged over, work px (about DIS's patch).
+    carry : float
+        Slow movers: each frame's residual is added to this share of the
+        previous sum, carried along the motion (0: off), so a motion too
+        slow for one frame's tolerance adds up over about ``1 / (1 - carry)``
+        frames while independent noise does not.
+    slow_px : float
+        The slowest steady residual motion the summed test flags, work
+        px/frame: its tolerance is ``slow_px / (1 - carry)`` (or the summed
+        field's own spread, as for one frame).
     """
 
     noise_sigmas: float = 3.0
@@ -84,13 +103,17 @@ class VelocityRayConfig:
     close_px: int = 5
     evidence_sigmas: float = 3.0
     evidence_box: int = 5
+    carry: float = 0.75
+    slow_px: float = 0.6
 
     def __post_init__(self) -> None:
         check_fields(
             self,
             positive=("noise_sigmas", "floor_px", "known_floor_px", "grow_ratio"),
-            non_negative=("close_px", "spread_sigmas"),
+            non_negative=("close_px", "spread_sigmas", "carry", "slow_px"),
         )
+        if self.carry >= 1:
+            raise ValueError(f"carry must be below 1, but got {self.carry}")
         if self.grow_ratio > 1:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
 
@@ -126,7 +149,8 @@ def known_ray_distance(field: VelocityField, model: ObserverMotion) -> np.ndarra
 class VelocityRayDetector:
     """Flags velocities no rigid world under the fitted (or known) motion allows.
 
-    State: the previous epipole, tried first in the next frame's fit.
+    State: the previous epipole, tried first in the next frame's fit, and the
+    residual summed over the recent frames (for slow movers).
 
     The observer motion is the field's ``camera`` (fitted once per frame by
     :class:`~motiondetect.detection.detector.MotionDetector` with its
@@ -141,9 +165,64 @@ class VelocityRayDetector:
         self.config = config or VelocityRayConfig()
         self.egomotion = egomotion
         self._epipole: np.ndarray | None = None
+        self._carried: np.ndarray | None = None
 
     def reset(self) -> None:
         self._epipole = None
+        self._carried = None
+
+    def _summed(self, field: VelocityField, fit: CameraFit) -> tuple[np.ndarray, float] | None:
+        """The residual summed along the motion (``carry``), as an off-ray
+        distance with its tolerance; None until there is a previous sum.
+
+        A pixel continues the sum carried from where it was only where its
+        residual continues the sum's mean: the trail a mover leaves starts
+        afresh, so the sum does not smear it backwards.
+        """
+        cfg = self.config
+        residual, carried = fit.residual_px, self._carried
+        if carried is None or carried.shape != residual.shape:
+            self._carried = residual
+            return None
+        source = field.pixel_grid - field.velocity_px
+        moved = cv2.remap(
+            carried, source[..., 0], source[..., 1], cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT, borderValue=0,
+        )  # fmt: skip
+        gap = residual - (1.0 - cfg.carry) * moved
+        continues = np.hypot(gap[..., 0], gap[..., 1]) < cfg.floor_px
+        total = residual + cfg.carry * moved * continues[..., None]
+        self._carried = total
+        distance = off_ray(total, field.pixel_grid, fit.epipole)
+        step = _SPREAD_STEP
+        spread = residual_spread(distance[step:-step:step, step:-step:step])
+        memory = 1.0 / (1.0 - cfg.carry)  # frames a steady sum reaches back
+        tolerance = max(cfg.slow_px * memory, cfg.spread_sigmas * spread)
+        # What entered the frame during that memory carries flow extrapolated
+        # at the edge, so the band reaches as far as the view moved meanwhile.
+        band = fit.edge_band_px + fit.median_speed_px * (memory - 1.0)
+        return without_frame_edge(distance, band), tolerance
+
+    def _slow_movers(
+        self, field: VelocityField, fit: CameraFit, found: np.ndarray, changed: np.ndarray | None
+    ) -> np.ndarray:
+        """Movers only the summed residual shows, apart from those ``found``
+        in this frame (the sum would only widen them), (h, w) bool."""
+        summed = self._summed(field, fit)
+        if summed is None:
+            return np.zeros_like(found)
+        distance, tolerance = summed
+        seeds = distance > tolerance
+        if changed is not None:
+            seeds &= changed
+        slow = hysteresis(distance, tolerance, self.config.grow_ratio, seeds)
+        if not slow.any():
+            return slow
+        count, labels = cv2.connectedComponents(slow.astype(np.uint8), connectivity=8)
+        keep = np.ones(count, bool)
+        keep[0] = False
+        keep[np.unique(labels[found])] = False
+        return keep[labels]
 
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         """Detect independent motion in one frame's velocity field."""
@@ -154,6 +233,7 @@ class VelocityRayDetector:
             self._epipole = fit.epipole
         known = self.egomotion(frame_index, field.geometry) if self.egomotion else None
         if not fit.reliable and known is None:
+            self._carried = None
             return DetectorOutput.empty(field.shape, camera=fit)
         floor = cfg.floor_px if known is None else cfg.known_floor_px
         tolerance = max(floor, cfg.noise_sigmas * fit.noise_px)
@@ -167,10 +247,13 @@ class VelocityRayDetector:
         seeds = distance > tolerance
         if field.tracked is not None:
             seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)
+        changed = None
         if cfg.evidence_sigmas > 0 and known is None and fit.plane_difference is not None:
             changed = fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
             seeds &= changed
         mask = hysteresis(distance, tolerance, cfg.grow_ratio, seeds)
+        if cfg.carry > 0 and known is None:
+            mask |= self._slow_movers(field, fit, mask, changed)
         if cfg.close_px > 1:
             kernel = np.ones((cfg.close_px, cfg.close_px), np.uint8)
             mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, kernel) > 0
