@@ -31,7 +31,7 @@ from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import hysteresis, without_frame_edge
-from motiondetect.measurement.dense_flow import VelocityField
+from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 NAME = "velocity-animate"
 _SQUARE3 = np.ones((3, 3), np.uint8)
@@ -156,7 +156,7 @@ def violations(
     Only points moving off the plane (``|residual| > tolerance``) are
     tested; see the module doc.
     """
-    moving = np.hypot(residual[..., 0], residual[..., 1]) > tolerance
+    moving = vector_length(residual) > tolerance
     h, w = moving.shape
     s = _TEST_STEP
     ys, xs = np.nonzero(moving[::s, ::s])
@@ -219,7 +219,7 @@ class VelocityAnimateDetector:
         # from, the previous one), each extrapolated along the frame edge.
         violation = without_frame_edge(violation, 2 * fit.edge_band_px)
         animate = self._remember(violation, field)
-        speed = np.hypot(fit.residual_px[..., 0], fit.residual_px[..., 1])
+        speed = vector_length(fit.residual_px)
         mask = hysteresis(speed, tolerance, 1.0, seeds=animate)
         strength = np.where(mask, speed / (speed + tolerance), 0.0).astype(np.float32)
         return DetectorOutput.from_mask(

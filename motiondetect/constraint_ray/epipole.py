@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from motiondetect.measurement.dense_flow import vector_length
+
 
 def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None) -> np.ndarray:
     """How far each residual lies off its point's constraint ray, px/frame.
@@ -30,9 +32,9 @@ def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None
         The component of the residual across the line through the point
         and the epipole (its length where the point is within 1 px of it).
     """
-    magnitude = np.hypot(residual[..., 0], residual[..., 1])
+    magnitude = vector_length(residual)
     if epipole is None:
-        return magnitude.astype(np.float32)
+        return magnitude
     ux = epipole[0] - epipole[2] * points[..., 0]
     uy = epipole[1] - epipole[2] * points[..., 1]
     norm = np.hypot(ux, uy)

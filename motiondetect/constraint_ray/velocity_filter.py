@@ -47,7 +47,7 @@ from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import hysteresis, without_frame_edge
-from motiondetect.measurement.dense_flow import VelocityField
+from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 NAME = "velocity-ray"
 _SPREAD_STEP = 8  # px between the samples the summed field's spread is measured on
@@ -184,14 +184,13 @@ class VelocityRayDetector:
         if carried is None or carried.shape != residual.shape:
             self._carried = residual
             return None
-        source = field.pixel_grid - field.velocity_px
         moved = cv2.remap(
-            carried, source[..., 0], source[..., 1], cv2.INTER_LINEAR,
+            carried, field.pixel_grid - field.velocity_px, None, cv2.INTER_LINEAR,
             borderMode=cv2.BORDER_CONSTANT, borderValue=0,
         )  # fmt: skip
-        gap = residual - (1.0 - cfg.carry) * moved
-        continues = np.hypot(gap[..., 0], gap[..., 1]) < cfg.floor_px
-        total = residual + cfg.carry * moved * continues[..., None]
+        gap = cv2.scaleAdd(moved, cfg.carry - 1.0, residual)  # residual - (1 - carry) moved
+        continues = (vector_length(gap) < cfg.floor_px).astype(np.float32)
+        total = cv2.scaleAdd(moved * continues[..., None], cfg.carry, residual)
         self._carried = total
         distance = off_ray(total, field.pixel_grid, fit.epipole)
         step = _SPREAD_STEP
