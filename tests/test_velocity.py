@@ -361,14 +361,15 @@ def test_animate_skips_the_frame_edge_of_both_flow_fields():
     assert with_band[1] == pytest.approx(without[1])
 
 
-def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch):
+@pytest.mark.parametrize("measure", ["velocity", "normal"])
+def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch, measure):
     from .scenes import scene
 
     frames = scene("pan", ("smooth", "animate"), frames=16)
-    serial = MotionDetector("both")
+    serial = MotionDetector("both", measure=measure)
     expected = [serial.process(fr.image, fr.index, fr.index / 30) for fr in frames]
     threads = set()
-    ahead = MotionDetector("both")
+    ahead = MotionDetector("both", measure=measure)
     measure = ahead.measure_frame
 
     def measure_and_note(image):
@@ -390,6 +391,7 @@ def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch):
         assert [r.bbox for r in got.regions] == [r.bbox for r in want.regions]
         assert [r.track for r in got.regions] == [r.track for r in want.regions]
         assert got.reason == want.reason
+        assert np.array_equal(got.flagged, want.flagged)
         if want.mask is not None:
             assert np.array_equal(got.mask, want.mask)
 
