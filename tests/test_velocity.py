@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from skimage import data
 
+from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, distance_to_segment
@@ -337,10 +338,10 @@ def test_a_tracked_mover_that_slows_stays_found():
     assert _slowing_mover_found(prior=False) <= 0.2  # measured 0.0
 
 
-def _animate_on_sample(name: str, edge_px: float) -> tuple[float, float]:
+def _animate_on_sample(name: str, *configs) -> tuple[float, float]:
     """(false-alarm regions per frame, object recall) of the animate detector alone."""
     folder = Path(__file__).resolve().parents[1] / "sample_videos" / name
-    md, counts = MotionDetector("animate", FitConfig(edge_px=edge_px)), Counts()
+    md, counts = MotionDetector("animate", *configs), Counts()
     with open_source(folder / "video.mp4") as source:
         for frame in source:
             result = md.process(frame.image, frame.index, frame.time_s)
@@ -355,10 +356,23 @@ def test_animate_skips_the_frame_edge_of_both_flow_fields():
     """Along the frame edge both the current flow and the previous one (read
     where each point came from) are extrapolated; the animate test skips twice
     the edge band there, which removes false alarms and no mover."""
-    with_band = _animate_on_sample("pan_blindspot", 4.0)
-    without = _animate_on_sample("pan_blindspot", 0.0)
+    no_evidence = VelocityAnimateConfig(evidence_sigmas=0.0)  # as when this was measured
+    with_band = _animate_on_sample("pan_blindspot", FitConfig(edge_px=4.0), no_evidence)
+    without = _animate_on_sample("pan_blindspot", FitConfig(edge_px=0.0), no_evidence)
     assert with_band[0] <= 0.8 and without[0] >= 1.0  # measured 0.66 and 1.26
     assert with_band[1] == pytest.approx(without[1])
+
+
+@pytest.mark.parametrize("name", ["pan_blindspot", "handheld_emerging"])
+def test_animate_violations_need_an_image_change(name):
+    """A flow that breaks its motion where the image, once the camera's motion
+    is undone, did not change is the measurement's error: gating violations
+    on an image change removes false alarms and keeps the movers."""
+    gated = _animate_on_sample(name)
+    ungated = _animate_on_sample(name, VelocityAnimateConfig(evidence_sigmas=0.0))
+    # measured 0.03 against 0.60 (pan_blindspot), 0.05 against 0.50
+    assert gated[0] <= 0.2 and ungated[0] >= 0.4
+    assert gated[1] == pytest.approx(ungated[1], abs=0.03)
 
 
 @pytest.mark.parametrize("measure", ["velocity", "normal"])

@@ -63,6 +63,15 @@ class VelocityAnimateConfig:
         An object that broke its motion stays animate this many frames: the
         label is carried with the object, moved by its velocity, so a limb
         reversing every few frames is flagged between reversals too.
+    evidence_sigmas : float
+        A violation must also show a grey-level change after the plane warp:
+        its ``evidence_box`` mean above this many robust sigmas of the
+        frame's changes (0: off), the constraint ray's seed rule. A flow
+        that jumps where the image did not change (blank surfaces, an
+        occluding edge DIS misplaces) is the measurement's error, not an
+        animal's.
+    evidence_box : int
+        Side of the box the change is averaged over, work px.
     """
 
     noise_sigmas: float = 3.0
@@ -72,13 +81,18 @@ class VelocityAnimateConfig:
     open_px: int = 5
     spread_px: float = 6.0
     memory_frames: int = 8
+    evidence_sigmas: float = 3.0
+    evidence_box: int = 5
 
     def __post_init__(self) -> None:
         check_fields(
             self,
-            positive=("noise_sigmas", "floor_px"),
-            non_negative=("accel_px", "accel_relative", "open_px", "spread_px", "memory_frames"),
-        )
+            positive=("noise_sigmas", "floor_px", "evidence_box"),
+            non_negative=(
+                "accel_px", "accel_relative", "open_px", "spread_px", "memory_frames",
+                "evidence_sigmas",
+            ),
+        )  # fmt: skip
 
 
 #: Violations are tested on every other pixel each way and spread to the
@@ -218,6 +232,8 @@ class VelocityAnimateDetector:
         # The test reads two flow fields (this one and, where each point came
         # from, the previous one), each extrapolated along the frame edge.
         violation = without_frame_edge(violation, 2 * fit.edge_band_px)
+        if cfg.evidence_sigmas > 0 and fit.plane_difference is not None:
+            violation &= fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
         animate = self._remember(violation, field)
         speed = vector_length(fit.residual_px)
         mask = hysteresis(speed, tolerance, 1.0, seeds=animate)
