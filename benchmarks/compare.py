@@ -233,8 +233,8 @@ def reading(pooled: dict[str, Counts]) -> list[str]:
         best = max(peers, key=lambda k: peers[k]["cell_f1"] or 0.0)
         verdict = "wins" if ours["cell_f1"] > (peers[best]["cell_f1"] or 0.0) else "loses"
         lines.append(
-            f"- **{group}**: {verdict}. Cell F1 {fmt(ours['cell_f1'])} against "
-            f"{fmt(peers[best]['cell_f1'])} ({best}) and {fmt(normal['cell_f1'])} (normal "
+            f"- **{group}**: {verdict}. Cell F1 {fmt(ours['cell_f1'], 3)} against "
+            f"{fmt(peers[best]['cell_f1'], 3)} ({best}) and {fmt(normal['cell_f1'], 3)} (normal "
             f"path); object recall {fmt(ours['object_recall'])} against "
             f"{fmt(peers[best]['object_recall'])} and {fmt(normal['object_recall'])}; "
             f"{fmt(ours[fa])} false-alarm regions per frame against {fmt(peers[best][fa])} "
