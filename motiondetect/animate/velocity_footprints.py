@@ -31,7 +31,7 @@ from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import hysteresis, without_frame_edge
-from motiondetect.measurement.dense_flow import VelocityField, vector_length
+from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-animate"
 _SQUARE3 = np.ones((3, 3), np.uint8)
@@ -162,22 +162,22 @@ def footprint_excess(
 
 
 def violations(
-    field: VelocityField, residual: np.ndarray, previous: np.ndarray, tolerance: float,
-    config: VelocityAnimateConfig,
+    field: VelocityField, residual: np.ndarray, speed: np.ndarray, previous: np.ndarray,
+    tolerance: float, config: VelocityAnimateConfig,
 ) -> np.ndarray:  # fmt: skip
     """Where the velocity broke its smooth continuation, (h, w) bool.
 
-    Only points moving off the plane (``|residual| > tolerance``) are
-    tested; see the module doc.
+    ``speed`` is ``|residual|``. Only points moving off the plane
+    (``speed > tolerance``) are tested; see the module doc.
     """
-    moving = vector_length(residual) > tolerance
+    moving = speed > tolerance
     h, w = moving.shape
     s = _TEST_STEP
     ys, xs = np.nonzero(moving[::s, ::s])
     coarse = np.zeros(((h + s - 1) // s, (w + s - 1) // s), np.uint8)
     if len(ys):
         ys, xs = ys * s, xs * s
-        source = field.pixel_grid[ys, xs] - field.velocity_px[ys, xs]
+        source = field.source_px[ys, xs]
         excess = footprint_excess(previous, source, residual[ys, xs], tolerance, config)
         coarse[ys // s, xs // s] = excess > 0
     mask = np.repeat(np.repeat(coarse, s, axis=0), s, axis=1)[:h, :w] & moving
@@ -212,9 +212,8 @@ class VelocityAnimateDetector:
         """Frames left of each pixel's animate label, carried along the motion."""
         memory = np.where(violation, self.config.memory_frames, 0).astype(np.float32)
         if self._memory is not None and self._memory.shape == violation.shape:
-            source = field.pixel_grid - field.velocity_px
             carried = cv2.remap(
-                self._memory, source[..., 0], source[..., 1], cv2.INTER_NEAREST,
+                self._memory, field.source_px, None, cv2.INTER_NEAREST,
                 borderMode=cv2.BORDER_CONSTANT, borderValue=0,
             )  # fmt: skip
             memory = np.maximum(memory, carried - 1)
@@ -228,14 +227,14 @@ class VelocityAnimateDetector:
         if not fit.reliable or previous is None or previous.shape != field.velocity_px.shape:
             return DetectorOutput.empty(field.shape, camera=fit)
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
-        violation = violations(field, fit.residual_px, previous, tolerance, cfg)
+        speed = fit.residual_length()
+        violation = violations(field, fit.residual_px, speed, previous, tolerance, cfg)
         # The test reads two flow fields (this one and, where each point came
         # from, the previous one), each extrapolated along the frame edge.
         violation = without_frame_edge(violation, 2 * fit.edge_band_px)
         if cfg.evidence_sigmas > 0 and fit.plane_difference is not None:
             violation &= fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
         animate = self._remember(violation, field)
-        speed = vector_length(fit.residual_px)
         mask = hysteresis(speed, tolerance, 1.0, seeds=animate)
         strength = np.where(mask, speed / (speed + tolerance), 0.0).astype(np.float32)
         return DetectorOutput.from_mask(

@@ -22,14 +22,14 @@ epipole, the previous frame's estimate.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.epipole import fit_epipole
-from motiondetect.measurement.dense_flow import VelocityField
+from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 #: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
 _MEDIAN_TO_SIGMA = 1.0 / np.sqrt(2.0 * np.log(2.0))
@@ -160,6 +160,9 @@ class CameraFit:
         (measured once per frame; None: measured when first needed).
     sharpness : float
         :func:`sharpness` of this frame.
+
+    Derived maps that several detectors read (:meth:`image_changed`,
+    :meth:`residual_length`) are computed once per fit and kept.
     """
 
     homography: np.ndarray | None
@@ -174,15 +177,26 @@ class CameraFit:
     edge_band_px: float = 0.0
     change_noise: float | None = None
     sharpness: float = 0.0
+    _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def image_changed(self, sigmas: float, box: int) -> np.ndarray:
         """Where the image changed beyond noise once the camera's motion is
         undone: the ``box``-px mean of ``plane_difference`` above ``sigmas``
-        times ``change_noise``, (h, w) bool."""
-        noise = self.change_noise
-        if noise is None:
-            noise = difference_noise(self.plane_difference)
-        return cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
+        times ``change_noise``, (h, w) bool. Do not modify the result: it is
+        shared."""
+        key = ("changed", sigmas, box)
+        if key not in self._memo:
+            noise = self.change_noise
+            if noise is None:
+                noise = difference_noise(self.plane_difference)
+            self._memo[key] = cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
+        return self._memo[key]
+
+    def residual_length(self) -> np.ndarray:
+        """``|residual_px|``, (h, w) float32 work px/frame (shared: do not modify)."""
+        if "length" not in self._memo:
+            self._memo["length"] = vector_length(self.residual_px)
+        return self._memo["length"]
 
     @property
     def reliable(self) -> bool:

@@ -14,7 +14,12 @@ import numpy as np
 from motiondetect.measurement.dense_flow import vector_length
 
 
-def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None) -> np.ndarray:
+def off_ray(
+    residual: np.ndarray,
+    points: np.ndarray,
+    epipole: np.ndarray | None,
+    magnitude: np.ndarray | None = None,
+) -> np.ndarray:
     """How far each residual lies off its point's constraint ray, px/frame.
 
     Parameters
@@ -25,6 +30,8 @@ def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None
     epipole : (3,) ndarray or None
         Homogeneous. None: no parallax is expected, so the whole residual
         is off the ray.
+    magnitude : (...) ndarray of float32, optional
+        ``|residual|`` when already known.
 
     Returns
     -------
@@ -32,7 +39,8 @@ def off_ray(residual: np.ndarray, points: np.ndarray, epipole: np.ndarray | None
         The component of the residual across the line through the point
         and the epipole (its length where the point is within 1 px of it).
     """
-    magnitude = vector_length(residual)
+    if magnitude is None:
+        magnitude = vector_length(residual)
     if epipole is None:
         return magnitude
     ux = epipole[0] - epipole[2] * points[..., 0]

@@ -185,7 +185,7 @@ class VelocityRayDetector:
             self._carried = residual
             return None
         moved = cv2.remap(
-            carried, field.pixel_grid - field.velocity_px, None, cv2.INTER_LINEAR,
+            carried, field.source_px, None, cv2.INTER_LINEAR,
             borderMode=cv2.BORDER_CONSTANT, borderValue=0,
         )  # fmt: skip
         gap = cv2.scaleAdd(moved, cfg.carry - 1.0, residual)  # residual - (1 - carry) moved
@@ -241,7 +241,9 @@ class VelocityRayDetector:
         if known is not None:
             distance = known_ray_distance(field, known)
         else:
-            distance = off_ray(fit.residual_px, field.pixel_grid, fit.epipole)
+            distance = off_ray(
+                fit.residual_px, field.pixel_grid, fit.epipole, fit.residual_length()
+            )
         distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
         if field.tracked is not None:

@@ -14,6 +14,7 @@ built from it line up with the frame being reported.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Literal
 
 import cv2
@@ -107,6 +108,12 @@ class VelocityField:
     @property
     def shape(self) -> tuple[int, int]:
         return self.grey.shape
+
+    @cached_property
+    def source_px(self) -> np.ndarray:
+        """(h, w, 2) float32: where each pixel was in the previous frame,
+        ``pixel_grid - velocity_px`` (computed once, shared: do not modify)."""
+        return self.pixel_grid - self.velocity_px
 
 
 def vector_length(vectors: np.ndarray) -> np.ndarray:
