@@ -144,7 +144,7 @@ def synth(
 
 @click.command()
 @click.argument("pred", type=click.Path(path_type=Path, exists=True, file_okay=False))
-@click.argument("gt", type=click.Path(path_type=Path, exists=True, file_okay=False))
+@click.argument("gt", type=click.Path(path_type=Path, exists=True))
 @click.option(
     "--warmup",
     type=click.IntRange(0),
@@ -162,7 +162,10 @@ def evaluate(pred, gt, warmup, output) -> None:
     """Score predicted masks (detect --masks) against ground-truth masks.
 
     Pixels follow changedetection.net: ground truth 0 is background, 255 mover,
-    85 and 170 are not scored. The columns:
+    85 and 170 are not scored. GT may instead be a box file (OTB's
+    groundtruth_rect.txt: one x,y,w,h line per frame, or a folder holding
+    it); then only obj.rec is scored, a hit being >= 10 % of the box flagged.
+    The columns:
 
     \b
     recall   share of mover pixels flagged (TP / (TP + FN))

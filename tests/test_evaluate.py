@@ -6,7 +6,13 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.tools.evaluate import Counts, evaluate_sequence, score_frame
+from motiondetect.tools.evaluate import (
+    Counts,
+    EvaluateError,
+    evaluate_sequence,
+    score_box,
+    score_frame,
+)
 
 
 def test_metrics_equal_hand_computed_numbers():
@@ -64,3 +70,33 @@ def test_pooled_counts_add():
     a, b = Counts(tp=1, fp=2, frames=1), Counts(tp=3, fn=1, frames=2)
     a.add(b)
     assert (a.tp, a.fp, a.fn, a.frames) == (4, 2, 1, 3)
+
+
+def test_a_box_is_found_when_a_tenth_of_it_is_flagged():
+    pred = np.zeros((20, 30), np.uint8)
+    box = (10, 5, 10, 10)  # x, y, w, h: 100 px
+    pred[5, 10:19] = 255  # 9 px inside
+    pred[0:5, :] = 255  # all outside the box
+    assert score_box(pred, box).objects_hit == 0
+    pred[6, 10] = 255  # 10 px inside
+    c = score_box(pred, box)
+    assert (c.objects, c.objects_hit, c.frames, c.box_frames) == (1, 1, 1, 1)
+    m = c.metrics()  # a box is not a mask: nothing else can be scored
+    assert m["precision"] is None and m["false_alarm_regions_per_frame"] is None
+    assert score_box(pred, (40, 40, 5, 5)).objects_hit == 0  # off the frame
+
+
+def test_box_files_score_object_recall(tmp_path):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    # OTB style: line i is frame i; tab- or comma-separated
+    (seq / "groundtruth_rect.txt").write_text("0,0,4,4\n0,0,4,4\n4\t4\t4\t4\n0,0,4,4\n")
+    corner = np.zeros((8, 8), np.uint8)
+    corner[:4, :4] = 255
+    for index in range(4):
+        write(tmp_path / "pred" / "masks", f"{index:06d}.png", corner)
+    score = evaluate_sequence(tmp_path / "pred", seq, warmup=1)
+    assert (score.counts.frames, score.counts.objects_hit) == (3, 2)  # frame 2's box is missed
+    (seq / "groundtruth_rect.txt").write_text("0,0,4\n")
+    with pytest.raises(EvaluateError, match="expected 'x,y,w,h'"):
+        evaluate_sequence(tmp_path / "pred", seq / "groundtruth_rect.txt")

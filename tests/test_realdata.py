@@ -63,6 +63,19 @@ def test_image_sequences_complete_and_score(
     assert m["false_alarm_regions_per_frame"] <= max_false_alarms
 
 
+# DragonBaby: handheld, jerky pans; the box is the child's face. Measured with the
+# defaults: the face box is found on 0.88 of the scored frames (8 of the 111 are
+# unreliable: blur or motion beyond the band).
+def test_otb_box_ground_truth_scores_the_handheld_clip(tmp_path):
+    root = shared_path("otb", "DragonBaby")
+    out = detect(tmp_path, root / "img")
+    score = evaluate_sequence(out, root, warmup=2)
+    assert score.counts.frames == 111 and score.counts.box_frames == 111
+    m = score.counts.metrics()
+    assert m["object_recall"] >= 0.8
+    assert m["precision"] is None and m["false_alarm_regions_per_frame"] is None
+
+
 def test_woman_mp4_completes(tmp_path):
     source = shared_path("woman", "woman.mp4")
     out = detect(tmp_path, source)

@@ -10,6 +10,12 @@ sequence folder holding one such folder as ``groundtruth/``,
 * DAVIS: ``NNNNN.png``, 0/255;
 * motiondetect synth: ``truth/NNNNNN.png``, 0/170/255.
 
+Or it is a text file of boxes, one ``x,y,w,h`` line per frame from the
+first (OTB's ``groundtruth_rect.txt``, comma- or tab-separated; a sequence
+folder holding that file also works). A box is not a mask and other movers
+are not boxed, so only object recall is scored there: the target is found
+when at least ``HIT_FRACTION`` of its box is flagged.
+
 GT files are sorted by the number in their names and aligned to predicted
 frames by subtracting the smallest number (UCSD starts at 1, the others at
 0), so GT number ``n`` scores predicted frame ``n - first``. A
@@ -30,7 +36,9 @@ from motiondetect.io.files import last_number
 from motiondetect.io.video import read_mask
 
 GT_FOLDERS = ("groundtruth", "Annotations", "truth", "masks")
+GT_BOXES = "groundtruth_rect.txt"
 UNKNOWN_VALUES = (85, 170)
+HIT_FRACTION = 0.1  # an object is found when at least this share of it is flagged
 
 
 class EvaluateError(ValueError):
@@ -52,6 +60,7 @@ class Counts:
     cell_tp: int = 0
     cell_fp: int = 0
     cell_fn: int = 0
+    box_frames: int = 0
 
     def add(self, other: Counts) -> None:
         for name in self.__dataclass_fields__:
@@ -78,7 +87,9 @@ class Counts:
             "precision": precision,
             "f_measure": f,
             "object_recall": ratio(self.objects_hit, self.objects),
-            "false_alarm_regions_per_frame": ratio(self.false_alarm_regions, self.frames),
+            "false_alarm_regions_per_frame": ratio(
+                self.false_alarm_regions, self.frames - self.box_frames
+            ),
             "cell_f1": ratio(2 * self.cell_tp, 2 * self.cell_tp + self.cell_fp + self.cell_fn),
             "frames": self.frames,
         }
@@ -92,7 +103,7 @@ class SequenceScore:
 
 def find_gt_folder(path: Path) -> Path:
     if not path.is_dir():
-        raise EvaluateError(f"{path}: ground truth must be a folder of PNG masks")
+        raise EvaluateError(f"{path}: ground truth must be a folder of PNG masks or a .txt box file")
     for name in GT_FOLDERS:
         if (path / name).is_dir():
             return path / name
@@ -138,7 +149,10 @@ def cell_counts(flagged: np.ndarray, positive: np.ndarray, mover_or_unknown: np.
 
 
 def score_frame(
-    pred: np.ndarray, gt: np.ndarray, min_object_px: int = 20, hit_fraction: float = 0.1
+    pred: np.ndarray,
+    gt: np.ndarray,
+    min_object_px: int = 20,
+    hit_fraction: float = HIT_FRACTION,
 ) -> Counts:
     """Tally one frame. ``pred`` > 127 is flagged; see the module doc for ``gt``."""
     if pred.shape != gt.shape:
@@ -169,6 +183,53 @@ def score_frame(
     return c
 
 
+def find_gt_boxes(path: Path) -> Path | None:
+    """The box file ``path`` is or holds, if any."""
+    if path.is_file() and path.suffix.lower() == ".txt":
+        return path
+    if path.is_dir() and (path / GT_BOXES).is_file():
+        return path / GT_BOXES
+    return None
+
+
+def read_boxes(path: Path) -> list[tuple[int, int, int, int]]:
+    """One ``(x, y, w, h)`` box per frame, input px; blank lines skipped."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise EvaluateError(f"{path}: cannot read boxes ({exc.__class__.__name__})") from None
+    boxes = []
+    for number, line in enumerate(text.splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            x, y, w, h = (int(float(v)) for v in line.replace("\t", ",").split(","))
+        except ValueError:
+            raise EvaluateError(
+                f"{path}:{number}: expected 'x,y,w,h', got {line.strip()!r}"
+            ) from None
+        boxes.append((x, y, w, h))
+    if not boxes:
+        raise EvaluateError(f"{path}: no boxes")
+    return boxes
+
+
+def score_box(pred: np.ndarray, box: tuple[int, int, int, int]) -> Counts:
+    """Tally one frame against one target box (object recall only)."""
+    x, y, w, h = box
+    inside = pred[max(y, 0) : max(y + h, 0), max(x, 0) : max(x + w, 0)] > 127
+    hit = inside.size > 0 and inside.mean() >= HIT_FRACTION
+    return Counts(frames=1, box_frames=1, objects=1, objects_hit=int(hit))
+
+
+def _evaluate_boxes(pred_dir: Path, boxes: list, warmup: int, score: SequenceScore) -> None:
+    preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
+    for index, box in enumerate(boxes):
+        mask = read_mask(preds[index]) if index >= warmup and index in preds else None
+        if mask is not None:
+            score.counts.add(score_box(mask, box))
+
+
 def evaluate_sequence(
     pred: Path, gt: Path, *, warmup: int = 1, name: str | None = None, min_object_px: int = 20
 ) -> SequenceScore:
@@ -176,6 +237,13 @@ def evaluate_sequence(
     pred_dir = pred / "masks" if (pred / "masks").is_dir() else pred
     if not pred_dir.is_dir():
         raise EvaluateError(f"{pred}: no predicted masks (run detect with --masks)")
+    score = SequenceScore(name or pred.name)
+    box_file = find_gt_boxes(gt)
+    if box_file is not None:
+        _evaluate_boxes(pred_dir, read_boxes(box_file), warmup, score)
+        if score.counts.frames == 0:
+            raise EvaluateError(f"{pred}: no predicted frame matches the boxes in {box_file}")
+        return score
     gt_dir = find_gt_folder(gt)
     gt_files = sorted(
         (
@@ -190,7 +258,6 @@ def evaluate_sequence(
     first = last_number(gt_files[0])
     roi = _temporal_roi(gt_dir)
     preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
-    score = SequenceScore(name or pred.name)
     for gt_file in gt_files:
         number = last_number(gt_file)
         index = number - first
@@ -215,7 +282,7 @@ def evaluate(pred: Path, gt: Path, *, warmup: int = 1) -> list[SequenceScore]:
         return [evaluate_sequence(pred, gt, warmup=warmup)]
     scores = []
     for sub in sorted(p for p in pred.iterdir() if p.is_dir()):
-        if (gt / sub.name).is_dir() and ((sub / "masks").is_dir()):
+        if (gt / sub.name).is_dir() and (sub / "masks").is_dir():
             scores.append(evaluate_sequence(sub, gt / sub.name, warmup=warmup, name=sub.name))
     if not scores:
         raise EvaluateError(f"{pred}: found no predicted sequence matching {gt}")
