@@ -28,6 +28,7 @@ from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_cam
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
+from motiondetect.detection.change_history import ChangeHistory
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
@@ -170,6 +171,7 @@ class MotionDetector:
         self.min_cells = min(getattr(d.config, "min_cells", 3) for d in self.detectors.values())
         self.fit_config = by_type.get(FitConfig, FitConfig())
         self.tracker = Tracker(track)
+        self._history = ChangeHistory(track.support_frames)
         if measure == "velocity":
             self.pipeline = DenseFlow(by_type.get(DenseFlowConfig))
         else:
@@ -186,6 +188,7 @@ class MotionDetector:
             det.reset()
         self._epipole, self._recent = None, []
         self._sharpness.clear()
+        self._history.reset()
 
     def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
         """Run one frame through the measurement and the detectors."""
@@ -255,11 +258,9 @@ class MotionDetector:
         union = np.zeros(flow.shape, bool)
         for out in outputs.values():
             union |= out.mask
+        self._history.update(flow, fit)
         track = self.tracker.config
-        changed = None
-        if track.support_sigmas > 0 and fit.plane_difference is not None:
-            changed = fit.image_changed(track.support_sigmas, _CHANGE_BOX)
-        objects = group_objects(union, flow.velocity_px, track, changed)
+        objects = group_objects(union, flow.velocity_px, track, self._support(fit, union))
         covered = sum(float(o.mask.mean()) for o in objects)
         reason = camera.reason
         if not reason and covered > self.fit_config.max_flagged_share:
@@ -280,6 +281,21 @@ class MotionDetector:
             index, time_s, regions, flagged, known, None, flow, outputs, mask=mask, camera=camera
         )
 
+    def _support(self, fit: CameraFit, flagged: np.ndarray) -> np.ndarray | None:
+        """Where the image changed once the camera's motion is undone: over one
+        frame, and for slow flagged parts also over ``support_frames``."""
+        track = self.tracker.config
+        if track.support_sigmas <= 0 or fit.plane_difference is None:
+            return None
+        changed = fit.image_changed(track.support_sigmas, _CHANGE_BOX)
+        if track.support_frames < 2 or fit.residual_px is None or not flagged.any():
+            return changed
+        slow = _slow_parts(flagged, fit.residual_length(), track)
+        if not slow.any():
+            return changed
+        longer = self._history.changed(track.support_sigmas, _CHANGE_BOX)
+        return changed if longer is None else changed | (longer & slow)
+
     def _persistent(
         self, flagged: np.ndarray, regions: list[Region]
     ) -> tuple[np.ndarray, list[Region]]:
@@ -293,3 +309,17 @@ class MotionDetector:
         grown = [cv2.dilate(r.astype(np.uint8), _GROW) > 0 for r in recent]
         kept = [r for r in regions if all(g[r.cells[:, 0], r.cells[:, 1]].any() for g in grown)]
         return (regions_mask(kept) if kept else np.zeros_like(flagged)), kept
+
+
+def _slow_parts(flagged: np.ndarray, speed: np.ndarray, track: TrackConfig) -> np.ndarray:
+    """The flagged components whose mean residual speed (work px/frame) carries
+    them no farther than ``support_px`` over ``support_frames - 1`` frames,
+    (h, w) bool: there the longer-baseline change adds a slow mover's plain
+    body; a faster mover would add the trail it left."""
+    count, labels = cv2.connectedComponents(flagged.astype(np.uint8), connectivity=8)
+    sums = np.bincount(labels.ravel(), weights=speed.ravel(), minlength=count)
+    sizes = np.bincount(labels.ravel(), minlength=count)
+    mean = sums / np.maximum(sizes, 1)
+    slow = mean * (track.support_frames - 1) <= track.support_px
+    slow[0] = False
+    return slow[labels]

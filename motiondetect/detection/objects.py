@@ -52,6 +52,14 @@ class TrackConfig:
         Reach of that image change, work px. The change map is a 3x3 mean,
         so it already reaches a pixel past the change; 2 kept masks closer
         to the movers than 4 (half of DIS's 8-px patch) on every data set.
+    support_frames : int
+        Slow movers: for flagged parts whose mean residual speed moves them
+        at most ``support_px`` over ``support_frames - 1`` frames, the image
+        change is also taken against the frame ``support_frames`` back,
+        registered by the chained planes (:mod:`.change_history`; 0 or 1:
+        one frame only). A grazing cow's plain body changes the image by
+        less than the noise in one frame but not in three; a faster
+        mover keeps the one-frame gate, which leaves out its trail.
     close_px : int
         Each object's mask is closed with a square this wide, work px (0:
         not closed): the support gate takes out a mover's plain interior,
@@ -71,6 +79,7 @@ class TrackConfig:
     min_iou: float = 0.1
     support_sigmas: float = 3.0
     support_px: int = 2
+    support_frames: int = 3
     close_px: int = 18
     prior: bool = False
 
@@ -85,6 +94,7 @@ class TrackConfig:
                 "min_iou",
                 "support_sigmas",
                 "support_px",
+                "support_frames",
                 "close_px",
             ),
         )

@@ -103,7 +103,7 @@ class SequenceScore:
 
 def find_gt_folder(path: Path) -> Path:
     if not path.is_dir():
-        raise EvaluateError(f"{path}: ground truth must be a folder of PNG masks or a .txt box file")
+        raise EvaluateError(f"{path}: ground truth must be a folder of PNG masks or a box file")
     for name in GT_FOLDERS:
         if (path / name).is_dir():
             return path / name

@@ -1,0 +1,98 @@
+"""Object support over a longer baseline: slow movers' plain bodies (issue 13)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import cv2
+import numpy as np
+import pytest
+
+from motiondetect.constraint_ray.camera_fit import difference_noise
+from motiondetect.detection.change_history import ChangeHistory, chained_difference
+from motiondetect.detection.detector import _slow_parts
+from motiondetect.detection.objects import TrackConfig
+
+
+def texture(shape, sigma, contrast, seed):
+    """Smooth random texture: blurred noise stretched to ``contrast`` grey levels."""
+    noise = np.random.default_rng(seed).random(shape).astype(np.float32)
+    smooth = cv2.GaussianBlur(noise, (0, 0), sigma)
+    smooth = (smooth - smooth.min()) / (smooth.max() - smooth.min())
+    return smooth * contrast
+
+
+def shifted(image, dx, dy):
+    """``image`` moved by (dx, dy) px, bilinear."""
+    m = np.float32([[1, 0, dx], [0, 1, dy]])
+    return cv2.warpAffine(image, m, image.shape[::-1], borderMode=cv2.BORDER_REFLECT)
+
+
+def plane_from_motion(dx, dy):
+    """The homography from current pixels to where they were: ``p - (dx, dy)``."""
+    return np.array([[1, 0, -dx], [0, 1, -dy], [0, 0, 1]], float)
+
+
+def test_the_chained_planes_register_a_moving_view_over_several_frames():
+    world = texture((140, 180), 2.0, 200, seed=1) + 20
+    step = (1.3, -0.7)  # the view's motion, px/frame
+    frames = [
+        np.clip(shifted(world, step[0] * i, step[1] * i), 0, 255).astype(np.uint8) for i in range(4)
+    ]
+    planes = [plane_from_motion(*step)] * 3
+    inner = (slice(10, -10), slice(10, -10))
+    registered = chained_difference(frames[0], planes, frames[3])[inner]
+    unregistered = chained_difference(frames[0], [np.eye(3)] * 3, frames[3])[inner]
+    assert registered.mean() < 2.0  # interpolation only
+    assert unregistered.mean() > 5 * registered.mean()
+
+
+def slow_mover_clip(speed, frames=4, seed=0):
+    """A still camera; a textured square moving ``speed`` px/frame over a
+    static texture, with 1.5 grey levels of sensor noise. Its texture changes
+    the image by about 7 grey levels a frame at 0.5 px/frame, under three
+    robust sigmas of the frame's difference (12), and by about 19 over three."""
+    rng = np.random.default_rng(seed)
+    background = texture((120, 160), 1.0, 160, seed=2) + 40
+    body = texture((120, 160), 1.0, 200, seed=3) + 10
+    out = []
+    for i in range(frames):
+        moved = shifted(body, speed * i, 0)
+        image = background.copy()
+        image[40:80, 50:90] = moved[40:80, 50:90]
+        image = image + rng.normal(0, 1.5, image.shape)
+        out.append(np.clip(image, 0, 255).astype(np.uint8))
+    return out
+
+
+@pytest.mark.parametrize("speed", [0.5])
+def test_a_slow_mover_changes_the_image_over_three_frames_not_one(speed):
+    frames = slow_mover_clip(speed)
+    history = ChangeHistory(3)
+    fit = SimpleNamespace(reliable=True, homography=np.eye(3))
+    for previous, grey in zip(frames, frames[1:]):
+        assert history.changed(3.0, 3) is None  # not enough frames held yet
+        history.update(SimpleNamespace(grey=grey, previous_grey=previous, shape=grey.shape), fit)
+    one = cv2.absdiff(frames[-1], frames[-2])
+    one_frame = cv2.blur(one, (3, 3)) > 3.0 * difference_noise(one)
+    longer = history.changed(3.0, 3)
+    body = (slice(44, 76), slice(54, 86))  # inside the square, off its edges
+    outside = np.ones(one.shape, bool)
+    outside[35:85, 45:95] = False
+    assert one_frame[body].mean() < 0.2  # measured 0.09
+    assert longer[body].mean() > 0.7  # measured 0.85
+    assert longer[outside].mean() < 0.01
+    history.update(SimpleNamespace(grey=frames[0], previous_grey=frames[0], shape=one.shape),
+                   SimpleNamespace(reliable=False, homography=None))  # fmt: skip
+    assert history.changed(3.0, 3) is None  # an unknown plane breaks the chain
+
+
+def test_only_slow_flagged_parts_take_the_longer_baseline():
+    flagged = np.zeros((40, 60), bool)
+    flagged[5:15, 5:15] = True  # a slow part
+    flagged[25:35, 30:50] = True  # a fast part
+    speed = np.zeros((40, 60), np.float32)
+    speed[5:15, 5:15] = 0.4
+    speed[25:35, 30:50] = 3.0
+    slow = _slow_parts(flagged, speed, TrackConfig(support_frames=3, support_px=2))
+    assert slow[5:15, 5:15].all() and not slow[25:35, 30:50].any() and not slow[~flagged].any()
