@@ -8,10 +8,10 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.constraint_ray.camera_fit import difference_noise
-from motiondetect.detection.change_history import ChangeHistory, chained_difference
+from motiondetect.detection.change_history import ChangeHistory
 from motiondetect.detection.detector import _slow_parts
 from motiondetect.detection.objects import TrackConfig
+from motiondetect.measurement.image_change import chained_difference, difference_noise
 
 
 def texture(shape, sigma, contrast, seed):

@@ -167,8 +167,9 @@ def violations(
 ) -> np.ndarray:  # fmt: skip
     """Where the velocity broke its smooth continuation, (h, w) bool.
 
-    ``speed`` is ``|residual|``. Only points moving off the plane
-    (``speed > tolerance``) are tested; see the module doc.
+    ``speed`` is the length of the residual the image determines
+    (``CameraFit.determined_length``). Only points moving off the plane by
+    more than ``tolerance`` are tested; see the module doc.
     """
     moving = speed > tolerance
     h, w = moving.shape
@@ -228,7 +229,9 @@ class VelocityAnimateDetector:
             return DetectorOutput.empty(field.shape, camera=fit)
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
         speed = fit.residual_length()
-        violation = violations(field, fit.residual_px, speed, previous, tolerance, cfg)
+        # Only points whose motion off the plane the image determines are tested.
+        determined = fit.determined_length(field)
+        violation = violations(field, fit.residual_px, determined, previous, tolerance, cfg)
         # The test reads two flow fields (this one and, where each point came
         # from, the previous one), each extrapolated along the frame edge.
         violation = without_frame_edge(violation, 2 * fit.edge_band_px)

@@ -29,12 +29,12 @@ import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.epipole import fit_epipole
+from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
+from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
 
 #: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
 _MEDIAN_TO_SIGMA = 1.0 / np.sqrt(2.0 * np.log(2.0))
-#: Gaussian 1-D noise: median |x| = sigma / 1.4826.
-_ABS_MEDIAN_TO_SIGMA = 1.4826
 #: Median speed below which a frame without parallax counts as static, px/frame.
 STATIC_SPEED_PX = 0.3
 
@@ -75,6 +75,14 @@ class FitConfig:
         blurred (a fast turn, a shake): its flow cannot be trusted. 0: off.
     blur_history : int
         Frames the sharpness reference is the median of.
+    aperture_noise : float
+        A residual velocity component counts half where the flow patch's
+        gradient energy along it equals the square of this many robust
+        sigmas of the frame's image difference (``change_noise``); less
+        where the image leaves it undetermined (a straight edge, stripes),
+        more where it pins it down (:mod:`~motiondetect.measurement.aperture`).
+        Seeds of both detectors are tested on that determined residual
+        (0: on the whole residual).
     edge_px : float
         Width of the band along the frame edge where content enters or
         leaves and the flow is extrapolated, work px, on top of the frame's
@@ -98,6 +106,7 @@ class FitConfig:
     max_flagged_share: float = 1.0
     blur_ratio: float = 1.0 / 3.0
     blur_history: int = 30
+    aperture_noise: float = 1.0
     edge_px: float = 4.0
     parallax: bool = False
 
@@ -117,6 +126,7 @@ class FitConfig:
                 "min_parallax_blocks",
                 "max_flagged_share",
                 "blur_ratio",
+                "aperture_noise",
                 "edge_px",
             ),
         )
@@ -160,9 +170,14 @@ class CameraFit:
         (measured once per frame; None: measured when first needed).
     sharpness : float
         :func:`sharpness` of this frame.
+    aperture_energy : float
+        Gradient energy a velocity component needs to count half in
+        :meth:`determined_residual`, grey levels^2/px^2 (0: every component
+        counts whole).
 
     Derived maps that several detectors read (:meth:`image_changed`,
-    :meth:`residual_length`) are computed once per fit and kept.
+    :meth:`residual_length`, :meth:`determined_residual`) are computed once
+    per fit and kept.
     """
 
     homography: np.ndarray | None
@@ -177,6 +192,7 @@ class CameraFit:
     edge_band_px: float = 0.0
     change_noise: float | None = None
     sharpness: float = 0.0
+    aperture_energy: float = 0.0
     _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def image_changed(self, sigmas: float, box: int) -> np.ndarray:
@@ -191,6 +207,26 @@ class CameraFit:
                 noise = difference_noise(self.plane_difference)
             self._memo[key] = cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
         return self._memo[key]
+
+    def determined_residual(self, field: VelocityField) -> np.ndarray:
+        """The part of ``residual_px`` the image determines
+        (:func:`~motiondetect.measurement.aperture.determined` over the
+        field's patch), (h, w, 2) float32 work px/frame (shared: do not modify)."""
+        if self.aperture_energy <= 0:
+            return self.residual_px
+        if "determined" not in self._memo:
+            self._memo["determined"] = determined(
+                self.residual_px, field.structure, self.aperture_energy
+            )
+        return self._memo["determined"]
+
+    def determined_length(self, field: VelocityField) -> np.ndarray:
+        """``|determined_residual|``, (h, w) float32 work px/frame (shared)."""
+        if self.aperture_energy <= 0:
+            return self.residual_length()
+        if "determined_length" not in self._memo:
+            self._memo["determined_length"] = vector_length(self.determined_residual(field))
+        return self._memo["determined_length"]
 
     def residual_length(self) -> np.ndarray:
         """``|residual_px|``, (h, w) float32 work px/frame (shared: do not modify)."""
@@ -279,12 +315,6 @@ def fit_homography(
     return homography, mask.ravel().astype(bool)
 
 
-def sharpness(grey: np.ndarray) -> float:
-    """Variance of the Laplacian of a (h, w) uint8 frame, grey levels squared:
-    fine texture, which motion blur removes."""
-    return float(cv2.Laplacian(grey, cv2.CV_32F).var())
-
-
 def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     if homography is None or share < config.min_inlier_share:
         return "too few inliers"
@@ -295,23 +325,6 @@ def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     if blurred:
         return "heavy blur"
     return ""
-
-
-def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray:
-    """``|grey - previous grey warped by the plane|``, (h, w) uint8 grey levels."""
-    h, w = field.shape
-    flags = cv2.WARP_INVERSE_MAP
-    warped = cv2.warpPerspective(field.previous_grey, homography, (w, h), flags=flags)
-    return cv2.absdiff(warped, field.grey)
-
-
-def difference_noise(difference: np.ndarray) -> float:
-    """Robust sigma of a (h, w) uint8 difference image plus one grey level of
-    quantisation, grey levels: most of a frame is explained by the plane, so
-    the median difference is its noise (found by histogram)."""
-    counts = np.bincount(difference.ravel(), minlength=256)
-    median = int(np.searchsorted(np.cumsum(counts), difference.size / 2))
-    return median * _ABS_MEDIAN_TO_SIGMA + 1.0
 
 
 def residual_spread(magnitude: np.ndarray) -> float:
@@ -372,7 +385,8 @@ def fit_camera(
             previous_epipole,
         )
     spread = residual_spread(magnitude)
+    change_noise = difference_noise(difference)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
-        difference_noise(difference), sharp,
+        change_noise, sharp, (config.aperture_noise * change_noise) ** 2,
     )  # fmt: skip

@@ -246,6 +246,9 @@ class VelocityRayDetector:
             )
         distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
+        if known is None and fit.aperture_energy > 0:
+            determined = fit.determined_residual(field)
+            seeds &= off_ray(determined, field.pixel_grid, fit.epipole) > tolerance
         if field.tracked is not None:
             seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)
         changed = None

@@ -1,6 +1,7 @@
 """Where the image changed over the last few frames once the camera's motion is undone.
 
-One frame's plane difference (:func:`~.camera_fit.plane_difference`) shows a
+One frame's plane difference
+(:func:`~motiondetect.measurement.image_change.plane_difference`) shows a
 mover only where it moved far enough, against the local texture, to change
 the image in one frame. A slow mover (a grazing cow, a pedestrian far away)
 moves a fraction of a pixel per frame: its plain body changes the image by
@@ -18,31 +19,9 @@ import collections
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.camera_fit import CameraFit, difference_noise
+from motiondetect.constraint_ray.camera_fit import CameraFit
 from motiondetect.measurement.dense_flow import VelocityField
-
-
-def chained_difference(
-    oldest: np.ndarray, homographies: list[np.ndarray], grey: np.ndarray
-) -> np.ndarray:
-    """``|grey - oldest warped by the chained planes|``, (h, w) uint8 grey levels.
-
-    Parameters
-    ----------
-    oldest : (h, w) ndarray of uint8
-        The working frame ``k`` frames back.
-    homographies : list of (3, 3) ndarray
-        Each frame's plane, current work pixels to the previous frame's,
-        oldest first (``k`` of them, the current frame's last).
-    grey : (h, w) ndarray of uint8
-        The current working frame.
-    """
-    chain = np.eye(3)
-    for homography in homographies:  # p_{t-k} = H_{t-k+1} ... H_t p_t
-        chain = chain @ homography
-    h, w = grey.shape
-    warped = cv2.warpPerspective(oldest, chain, (w, h), flags=cv2.WARP_INVERSE_MAP)
-    return cv2.absdiff(warped, grey)
+from motiondetect.measurement.image_change import chained_difference, difference_noise
 
 
 class ChangeHistory:

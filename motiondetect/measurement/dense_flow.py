@@ -22,6 +22,7 @@ import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.measurement import stages
+from motiondetect.measurement.aperture import structure_tensor
 from motiondetect.measurement.normal_flow import GridGeometry
 
 PRESETS = {
@@ -95,6 +96,9 @@ class VelocityField:
         so that every detector shares it.
     tracked : (h, w) ndarray of bool, optional
         Where the confirmed tracks are predicted to be in this frame.
+    patch_px : int
+        Side of the patch each velocity is measured over, work px (DIS's
+        patch at its finest pyramid level, scaled to the working size).
     """
 
     velocity_px: np.ndarray
@@ -104,6 +108,7 @@ class VelocityField:
     pixel_grid: np.ndarray
     camera: Any = None
     tracked: np.ndarray | None = None
+    patch_px: int = 8
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -114,6 +119,12 @@ class VelocityField:
         """(h, w, 2) float32: where each pixel was in the previous frame,
         ``pixel_grid - velocity_px`` (computed once, shared: do not modify)."""
         return self.pixel_grid - self.velocity_px
+
+    @cached_property
+    def structure(self) -> tuple[np.ndarray, ...]:
+        """:func:`~motiondetect.measurement.aperture.structure_tensor` of the
+        current frame over the flow's patch (computed once, shared)."""
+        return structure_tensor(self.grey, self.patch_px | 1)
 
 
 def vector_length(vectors: np.ndarray) -> np.ndarray:
@@ -165,6 +176,8 @@ class DenseFlow:
         self._dis.setPatchStride(self.config.patch_stride)
         if self.config.refinement_iterations is not None:
             self._dis.setVariationalRefinementIterations(self.config.refinement_iterations)
+        # The finest pyramid level DIS measures on is 2^finest_scale coarser.
+        self._patch_px = self._dis.getPatchSize() * 2 ** self._dis.getFinestScale()
         self._previous: np.ndarray | None = None
         self._geometry: GridGeometry | None = None
         self._grid: np.ndarray | None = None
@@ -201,4 +214,6 @@ class DenseFlow:
             return None
         # Flow from the current frame back to the previous one, at current pixels.
         backward = self._dis.calc(grey, previous, None)
-        return VelocityField(-backward, grey, previous, self._geometry, self._grid)
+        return VelocityField(
+            -backward, grey, previous, self._geometry, self._grid, patch_px=self._patch_px
+        )

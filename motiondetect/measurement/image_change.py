@@ -1,0 +1,65 @@
+"""Where the image changed once the camera's motion is undone.
+
+A mover changes the image where it is; flow alone can be wrong (blank sky,
+water, the boundaries DIS smears across). The plane difference is the
+current working frame against the previous one warped by the fitted
+dominant plane; the chained difference reaches further back through the
+product of several frames' planes, so a slow mover, which changes the
+image by less than the noise in one frame, shows over several.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motiondetect.measurement.dense_flow import VelocityField
+
+#: Gaussian 1-D noise: median |x| = sigma / 1.4826.
+_ABS_MEDIAN_TO_SIGMA = 1.4826
+
+
+def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray:
+    """``|grey - previous grey warped by the plane|``, (h, w) uint8 grey levels."""
+    h, w = field.shape
+    flags = cv2.WARP_INVERSE_MAP
+    warped = cv2.warpPerspective(field.previous_grey, homography, (w, h), flags=flags)
+    return cv2.absdiff(warped, field.grey)
+
+
+def chained_difference(
+    oldest: np.ndarray, homographies: list[np.ndarray], grey: np.ndarray
+) -> np.ndarray:
+    """``|grey - oldest warped by the chained planes|``, (h, w) uint8 grey levels.
+
+    Parameters
+    ----------
+    oldest : (h, w) ndarray of uint8
+        The working frame ``k`` frames back.
+    homographies : list of (3, 3) ndarray
+        Each frame's plane, current work pixels to the previous frame's,
+        oldest first (``k`` of them, the current frame's last).
+    grey : (h, w) ndarray of uint8
+        The current working frame.
+    """
+    chain = np.eye(3)
+    for homography in homographies:  # p_{t-k} = H_{t-k+1} ... H_t p_t
+        chain = chain @ homography
+    h, w = grey.shape
+    warped = cv2.warpPerspective(oldest, chain, (w, h), flags=cv2.WARP_INVERSE_MAP)
+    return cv2.absdiff(warped, grey)
+
+
+def difference_noise(difference: np.ndarray) -> float:
+    """Robust sigma of a (h, w) uint8 difference image plus one grey level of
+    quantisation, grey levels: most of a frame is explained by the plane, so
+    the median difference is its noise (found by histogram)."""
+    counts = np.bincount(difference.ravel(), minlength=256)
+    median = int(np.searchsorted(np.cumsum(counts), difference.size / 2))
+    return median * _ABS_MEDIAN_TO_SIGMA + 1.0
+
+
+def sharpness(grey: np.ndarray) -> float:
+    """Variance of the Laplacian of a (h, w) uint8 frame, grey levels squared:
+    fine texture, which motion blur removes."""
+    return float(cv2.Laplacian(grey, cv2.CV_32F).var())
