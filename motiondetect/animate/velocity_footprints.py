@@ -162,16 +162,15 @@ def footprint_excess(
 
 
 def violations(
-    field: VelocityField, residual: np.ndarray, speed: np.ndarray, previous: np.ndarray,
+    field: VelocityField, residual: np.ndarray, moving: np.ndarray, previous: np.ndarray,
     tolerance: float, config: VelocityAnimateConfig,
 ) -> np.ndarray:  # fmt: skip
     """Where the velocity broke its smooth continuation, (h, w) bool.
 
-    ``speed`` is the length of the residual the image determines
-    (``CameraFit.determined_length``). Only points moving off the plane by
-    more than ``tolerance`` are tested; see the module doc.
+    Only the ``moving`` points are tested: those whose residual the image
+    determines exceeds ``tolerance`` (``CameraFit.determined_beyond``); see
+    the module doc.
     """
-    moving = speed > tolerance
     h, w = moving.shape
     s = _TEST_STEP
     ys, xs = np.nonzero(moving[::s, ::s])
@@ -230,8 +229,8 @@ class VelocityAnimateDetector:
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
         speed = fit.residual_length()
         # Only points whose motion off the plane the image determines are tested.
-        determined = fit.determined_length(field)
-        violation = violations(field, fit.residual_px, determined, previous, tolerance, cfg)
+        moving = fit.determined_beyond(field, speed > tolerance, tolerance)
+        violation = violations(field, fit.residual_px, moving, previous, tolerance, cfg)
         # The test reads two flow fields (this one and, where each point came
         # from, the previous one), each extrapolated along the frame edge.
         violation = without_frame_edge(violation, 2 * fit.edge_band_px)

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.epipole import fit_epipole
+from motiondetect.constraint_ray.epipole import fit_epipole, off_ray
 from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
@@ -172,12 +172,11 @@ class CameraFit:
         :func:`sharpness` of this frame.
     aperture_energy : float
         Gradient energy a velocity component needs to count half in
-        :meth:`determined_residual`, grey levels^2/px^2 (0: every component
+        :meth:`determined_beyond`, grey levels^2/px^2 (0: every component
         counts whole).
 
     Derived maps that several detectors read (:meth:`image_changed`,
-    :meth:`residual_length`, :meth:`determined_residual`) are computed once
-    per fit and kept.
+    :meth:`residual_length`) are computed once per fit and kept.
     """
 
     homography: np.ndarray | None
@@ -208,25 +207,29 @@ class CameraFit:
             self._memo[key] = cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
         return self._memo[key]
 
-    def determined_residual(self, field: VelocityField) -> np.ndarray:
-        """The part of ``residual_px`` the image determines
+    def determined_beyond(
+        self, field: VelocityField, candidates: np.ndarray, tolerance: float,
+        epipole: np.ndarray | None = None,
+    ) -> np.ndarray:  # fmt: skip
+        """``candidates`` narrowed to the pixels whose *determined* residual
         (:func:`~motiondetect.measurement.aperture.determined` over the
-        field's patch), (h, w, 2) float32 work px/frame (shared: do not modify)."""
-        if self.aperture_energy <= 0:
-            return self.residual_px
-        if "determined" not in self._memo:
-            self._memo["determined"] = determined(
-                self.residual_px, field.structure, self.aperture_energy
-            )
-        return self._memo["determined"]
+        field's patch) lies off the ray through ``epipole`` by more than
+        ``tolerance`` px/frame; (h, w) bool, a new array.
 
-    def determined_length(self, field: VelocityField) -> np.ndarray:
-        """``|determined_residual|``, (h, w) float32 work px/frame (shared)."""
-        if self.aperture_energy <= 0:
-            return self.residual_length()
-        if "determined_length" not in self._memo:
-            self._memo["determined_length"] = vector_length(self.determined_residual(field))
-        return self._memo["determined_length"]
+        Evaluated at the candidates only (the residual itself is the bound:
+        the determined part is never longer), so a frame without
+        candidates costs nothing.
+        """
+        out = candidates.copy()
+        if not out.any():
+            return out
+        ys, xs = np.nonzero(out)
+        residual = self.residual_px[ys, xs]
+        if self.aperture_energy > 0:
+            tensor = tuple(t[ys, xs] for t in field.structure)
+            residual = determined(residual, tensor, self.aperture_energy)
+        out[ys, xs] = off_ray(residual, field.pixel_grid[ys, xs], epipole) > tolerance
+        return out
 
     def residual_length(self) -> np.ndarray:
         """``|residual_px|``, (h, w) float32 work px/frame (shared: do not modify)."""

@@ -246,9 +246,8 @@ class VelocityRayDetector:
             )
         distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
-        if known is None and fit.aperture_energy > 0:
-            determined = fit.determined_residual(field)
-            seeds &= off_ray(determined, field.pixel_grid, fit.epipole) > tolerance
+        if known is None:
+            seeds = fit.determined_beyond(field, seeds, tolerance, fit.epipole)
         if field.tracked is not None:
             seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)
         changed = None

@@ -138,6 +138,8 @@ def hysteresis(
     ``seeds`` (bool), when given, replaces the strong points as the seeds."""
     if seeds is None:
         seeds = distance > tolerance
+    if not seeds.any():
+        return np.zeros(distance.shape, bool)
     strong = cv2.morphologyEx(seeds.astype(np.uint8), cv2.MORPH_OPEN, _SQUARE3)
     weak = (distance > grow_ratio * tolerance).astype(np.uint8)
     count, labels = cv2.connectedComponents(weak, connectivity=8)
