@@ -316,9 +316,12 @@ def _slow_parts(flagged: np.ndarray, speed: np.ndarray, track: TrackConfig) -> n
     them no farther than ``support_px`` over ``support_frames - 1`` frames,
     (h, w) bool: there the longer-baseline change adds a slow mover's plain
     body; a faster mover would add the trail it left."""
+    if not flagged.any():
+        return flagged.copy()
     count, labels = cv2.connectedComponents(flagged.astype(np.uint8), connectivity=8)
-    sums = np.bincount(labels.ravel(), weights=speed.ravel(), minlength=count)
-    sizes = np.bincount(labels.ravel(), minlength=count)
+    inside = labels[flagged]
+    sums = np.bincount(inside, weights=speed[flagged], minlength=count)
+    sizes = np.bincount(inside, minlength=count)
     mean = sums / np.maximum(sizes, 1)
     slow = mean * (track.support_frames - 1) <= track.support_px
     slow[0] = False
