@@ -158,7 +158,7 @@ def waving(period_half: int, speed: float, frames: int = 30):
     return lambda t: (x(t), 90.0)
 
 
-@pytest.mark.parametrize("period_half,speed", [(4, 10.0), (5, 12.0), (6, 15.0)])
+@pytest.mark.parametrize("period_half,speed", [(4, 10.0), (5, 12.0), (6, 15.0), (4, 30.0)])
 def test_animate_alone_flags_reversing_movers(period_half, speed):
     clip = _pan_with_mover(waving(period_half, speed), frames=30, pan=1.5)
     md = MotionDetector("animate", persistence=1)
