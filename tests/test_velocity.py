@@ -342,7 +342,8 @@ def test_a_tracked_mover_that_slows_stays_found():
 
 
 def _animate_on_sample(name: str, *configs, detector: str = "animate") -> tuple[float, float]:
-    """(false-alarm regions per frame, object recall) of the animate detector alone."""
+    """(false-alarm regions per frame, object recall) of ``detector`` (the
+    animate detector alone unless named) on a sample video."""
     folder = Path(__file__).resolve().parents[1] / "sample_videos" / name
     md, counts = MotionDetector(detector, *configs), Counts()
     with open_source(folder / "video.mp4") as source:

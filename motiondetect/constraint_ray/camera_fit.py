@@ -82,7 +82,8 @@ class FitConfig:
         where the image leaves it undetermined (a straight edge, stripes),
         more where it pins it down (:mod:`~motiondetect.measurement.aperture`).
         Seeds of both detectors are tested on that determined residual
-        (0: on the whole residual).
+        (0: on the whole residual); under known ego-motion the constraint
+        ray keeps its depth-bounded test on the whole residual.
     edge_px : float
         Width of the band along the frame edge where content enters or
         leaves and the flow is extrapolated, work px, on top of the frame's

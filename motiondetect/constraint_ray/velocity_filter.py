@@ -246,14 +246,15 @@ class VelocityRayDetector:
             )
         distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
-        if known is None:
-            seeds = fit.determined_beyond(field, seeds, tolerance, fit.epipole)
-        if field.tracked is not None:
-            seeds |= field.tracked & (distance > cfg.grow_ratio * tolerance)
         changed = None
         if cfg.evidence_sigmas > 0 and known is None and fit.plane_difference is not None:
             changed = fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
             seeds &= changed
+        if known is None:  # the cheap gates first: this one is per pixel
+            seeds = fit.determined_beyond(field, seeds, tolerance, fit.epipole)
+        if field.tracked is not None:  # a track's pixels seed from the growth threshold
+            held = field.tracked & (distance > cfg.grow_ratio * tolerance)
+            seeds |= held if changed is None else held & changed
         mask = hysteresis(distance, tolerance, cfg.grow_ratio, seeds)
         if cfg.carry > 0 and known is None:
             mask |= self._slow_movers(field, fit, mask, changed)
