@@ -11,6 +11,12 @@ import cv2
 import numpy as np
 from skimage import data
 
+#: The real clips: $MOTIONDETECT_DATA, else ../shared/data beside the checkout
+#: (the same rule as tests/conftest.py).
+SHARED_DATA = Path(
+    os.environ.get("MOTIONDETECT_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data"
+)
+
 
 def single_thread() -> None:
     """One core: OpenCV and BLAS both limited to one thread."""

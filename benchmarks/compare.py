@@ -26,6 +26,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from common import SHARED_DATA
 
 from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.detection.detector import MotionDetector
@@ -40,7 +41,7 @@ from motiondetect.tools.evaluate import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "data"
+SHARED = SHARED_DATA
 WARMUP = 2
 
 

@@ -28,7 +28,7 @@ import cv2
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from common import decode_only, make_pan_clip, mog2_on  # noqa: E402
+from common import SHARED_DATA, decode_only, make_pan_clip, mog2_on  # noqa: E402
 
 from motiondetect.app.inputs import InputJob  # noqa: E402
 from motiondetect.app.process import process_input  # noqa: E402
@@ -205,7 +205,7 @@ def _cluster_startup_s() -> float:
     return time.perf_counter() - t
 
 
-SHARED = HERE.parents[1] / "shared" / "data"
+SHARED = SHARED_DATA
 
 
 def real_clips(tmp: Path) -> list[Path]:

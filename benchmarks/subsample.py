@@ -1,0 +1,73 @@
+"""A lower frame rate of the shared clips, for checking that results hold.
+
+Every ``step``-th frame of each DAVIS clip and of UCSD's moving-camera clips
+(with its ground truth) is linked, renumbered, into ``OUT``; nothing is
+copied. Motion per frame grows ``step`` times, as in footage shot at a lower
+frame rate::
+
+    python benchmarks/subsample.py /tmp/half --step 2
+    MOTIONDETECT_DATA=/tmp/half python benchmarks/compare.py --out /tmp/half.md
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from common import SHARED_DATA
+
+from motiondetect.io.files import last_number
+
+UCSD_MOVING = ("birds", "cyclists", "surfers", "landing")
+
+
+def _link(source: Path, target: Path) -> None:
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.unlink(missing_ok=True)
+    target.symlink_to(source.resolve())
+
+
+def _numbered(folder: Path, suffix: str) -> list[Path]:
+    return sorted(folder.glob(f"*{suffix}"), key=last_number)
+
+
+def subsample_davis(out: Path, step: int) -> int:
+    clips = 0
+    for images in sorted((SHARED_DATA / "davis").glob("*/JPEGImages")):
+        masks = images.parent / "Annotations"
+        for new, frame in enumerate(_numbered(images, ".jpg")[::step]):
+            seq = out / "davis" / images.parent.name
+            _link(frame, seq / "JPEGImages" / f"{new:05d}.jpg")
+            _link(masks / f"{frame.stem}.png", seq / "Annotations" / f"{new:05d}.png")
+        clips += 1
+    return clips
+
+
+def subsample_ucsd(out: Path, step: int) -> int:
+    clips = 0
+    for name in UCSD_MOVING:
+        seq = SHARED_DATA / "ucsd" / name
+        if not seq.is_dir():
+            continue
+        for new, frame in enumerate(_numbered(seq / "in", ".jpg")[::step], start=1):
+            truth = seq / "groundtruth" / f"gt{last_number(frame):04d}.png"
+            _link(frame, out / "ucsd" / name / "in" / f"frame_{new}.jpg")
+            if truth.exists():
+                _link(truth, out / "ucsd" / name / "groundtruth" / f"gt{new:04d}.png")
+        clips += 1
+    return clips
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", type=Path)
+    parser.add_argument("--step", type=int, default=2)
+    args = parser.parse_args()
+    if args.step < 1:
+        parser.error("--step must be at least 1")
+    davis, ucsd = subsample_davis(args.out, args.step), subsample_ucsd(args.out, args.step)
+    print(f"{davis} DAVIS and {ucsd} UCSD clips at 1/{args.step} of their frames in {args.out}")
+
+
+if __name__ == "__main__":
+    main()
