@@ -41,7 +41,6 @@ from motiondetect.tools.evaluate import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = SHARED_DATA
 WARMUP = 2
 
 
@@ -157,20 +156,19 @@ def sequences(quick: bool) -> list[tuple[str, Path, Path | None, Path | None]]:
             out.append(
                 (f"sample/{folder.name}", folder / "video.mp4", folder, folder / "scene.json")
             )
-    if quick or not SHARED.exists():
+    if quick or not SHARED_DATA.exists():
         return out
-    for seq in sorted((SHARED / "davis").glob("*/JPEGImages")):
+    for seq in sorted((SHARED_DATA / "davis").glob("*/JPEGImages")):
         out.append((f"davis/{seq.parent.name}", seq, seq.parent / "Annotations", None))
-    for seq in sorted((SHARED / "ucsd").glob("*/in")):
+    for seq in sorted((SHARED_DATA / "ucsd").glob("*/in")):
         out.append((f"ucsd/{seq.parent.name}", seq, seq.parent / "groundtruth", None))
-    for seq in sorted((SHARED / "sbi").glob("*/input")):
+    for seq in sorted((SHARED_DATA / "sbi").glob("*/input")):
         out.append((f"sbi/{seq.parent.name}", seq, seq.parent / "groundtruth", None))
-    for seq in sorted((SHARED / "otb").glob("*/img")):
+    for seq in sorted((SHARED_DATA / "otb").glob("*/img")):
         out.append((f"otb/{seq.parent.name}", seq, seq.parent / "groundtruth_rect.txt", None))
-    if (SHARED / "fox" / "images").exists():
-        out.append(
-            ("fox (no mover)", SHARED / "fox" / "images", None, SHARED / "fox" / "transforms.json")
-        )
+    fox = SHARED_DATA / "fox"
+    if (fox / "images").exists():
+        out.append(("fox (no mover)", fox / "images", None, fox / "transforms.json"))
     return out
 
 

@@ -205,15 +205,12 @@ def _cluster_startup_s() -> float:
     return time.perf_counter() - t
 
 
-SHARED = SHARED_DATA
-
-
 def real_clips(tmp: Path) -> list[Path]:
     """woman.mp4 and one 854x480 DAVIS clip (re-encoded to MPEG-4), when present."""
     clips = []
-    if (SHARED / "woman" / "woman.mp4").exists():
-        clips.append(SHARED / "woman" / "woman.mp4")
-    frames = sorted((SHARED / "davis" / "dog" / "JPEGImages").glob("*.jpg"))
+    if (SHARED_DATA / "woman" / "woman.mp4").exists():
+        clips.append(SHARED_DATA / "woman" / "woman.mp4")
+    frames = sorted((SHARED_DATA / "davis" / "dog" / "JPEGImages").glob("*.jpg"))
     if frames:
         first = cv2.imread(str(frames[0]))
         h, w = first.shape[:2]
