@@ -316,8 +316,6 @@ def _slow_parts(flagged: np.ndarray, speed: np.ndarray, track: TrackConfig) -> n
     them no farther than ``support_px`` over ``support_frames - 1`` frames,
     (h, w) bool: there the longer-baseline change adds a slow mover's plain
     body; a faster mover would add the trail it left."""
-    if not flagged.any():
-        return flagged.copy()
     count, labels = cv2.connectedComponents(flagged.astype(np.uint8), connectivity=8)
     inside = labels[flagged]
     sums = np.bincount(inside, weights=speed[flagged], minlength=count)
