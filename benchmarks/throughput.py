@@ -58,6 +58,16 @@ def decode_pyav(path: Path) -> int:
         return sum(1 for _ in source)
 
 
+def decode_pyav_swscale(path: Path) -> int:
+    """PyAV decode to BGR through FFmpeg's swscale (the tool's conversion before)."""
+    import av
+
+    with av.open(str(path)) as container:
+        stream = container.streams.video[0]
+        stream.thread_type = "AUTO"
+        return sum(1 for f in container.decode(stream) if f.to_ndarray(format="bgr24") is not None)
+
+
 def encode_cost(clip: Path, tmp: Path) -> None:
     """Writing the annotated video alone: ms per frame and size, per format and x264 preset."""
     from motiondetect.io import encode as enc
@@ -116,6 +126,7 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
 
     rows.append(("decode only, OpenCV", best(lambda: decode_only(clip))))
     rows.append(("decode only, PyAV (the tool's decoder)", best(lambda: decode_pyav(clip))))
+    rows.append(("decode only, PyAV, BGR by swscale", best(lambda: decode_pyav_swscale(clip))))
     rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
     rows.append(("stage pipeline only (decode + stages)", best(lambda: stages_only(clip))))
     for name, options in VARIANTS.items():

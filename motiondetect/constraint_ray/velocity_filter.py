@@ -62,8 +62,11 @@ class VelocityRayConfig:
     noise_sigmas : float
         Tolerance in robust noise sigmas of the frame's residual.
     floor_px : float
-        Smallest tolerance under the fitted motion, work px/frame (DIS's
-        error on textured sub-pixel motion is about 0.1 px).
+        Smallest tolerance under the fitted motion, work px/frame: five
+        times DIS's error on textured sub-pixel motion (about 0.1 px), the
+        same five sigmas as ``spread_sigmas``. DIS's larger errors (low
+        texture, content entering the frame) are left to the aperture test
+        (``FitConfig.aperture_noise``) and the frame-edge band.
     spread_sigmas : float
         Under the fitted motion the tolerance is also at least this many
         robust sigmas of the whole frame's plane residual
@@ -96,7 +99,7 @@ class VelocityRayConfig:
     """
 
     noise_sigmas: float = 3.0
-    floor_px: float = 0.8
+    floor_px: float = 0.5
     spread_sigmas: float = 5.0
     known_floor_px: float = 0.3
     grow_ratio: float = 0.5

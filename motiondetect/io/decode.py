@@ -34,6 +34,7 @@ from pathlib import Path
 import av
 import numpy as np
 
+from motiondetect.io.colour import frame_to_bgr
 from motiondetect.io.source import (
     DEFAULT_FRAMES_FPS,
     FrameSource,
@@ -215,7 +216,7 @@ class AvSource(FrameSource):
                 return
 
     def _image(self, frame: av.VideoFrame) -> np.ndarray:
-        image = frame.to_ndarray(format="bgr24")
+        image = frame_to_bgr(frame)
         return np.ascontiguousarray(np.rot90(image, self._turns)) if self._turns else image
 
     def __iter__(self) -> Iterator[SourceFrame]:

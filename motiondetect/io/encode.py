@@ -15,7 +15,8 @@ The x264 preset and quality were chosen by measurement
 (``benchmarks/throughput.py --encode``; ``docs/performance.md``). Frames
 are written to a hidden temporary file, renamed on success, so a crash
 never leaves a half video under the final name. Odd frame sizes are padded
-by one edge pixel, since 4:2:0 needs even sizes.
+by one edge pixel, since 4:2:0 needs even sizes; frames reach the encoder
+already in ``yuv420p`` (:func:`~motiondetect.io.colour.bgr_to_frame`).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import av
 import cv2
 import numpy as np
 
+from motiondetect.io.colour import bgr_to_frame
 from motiondetect.io.files import temporary_path
 from motiondetect.io.source import VideoError
 
@@ -91,7 +93,7 @@ class VideoSink:
                 frame, 0, self._even[1] - frame.shape[0], 0, self._even[0] - frame.shape[1],
                 cv2.BORDER_REPLICATE,
             )  # fmt: skip
-        out = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="bgr24")
+        out = bgr_to_frame(np.ascontiguousarray(frame))
         t = self.frames * self._period if time_s is None else time_s
         pts = max(int(round(t / TIME_BASE)), self._last_pts + 1)  # strictly increasing
         out.pts, out.time_base, self._last_pts = pts, TIME_BASE, pts
