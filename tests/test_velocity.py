@@ -417,7 +417,9 @@ def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch, measu
             assert np.array_equal(got.mask, want.mask)
 
 
-def _slow_mover_frames(frames, carry: float, floor_px: float = 1.0) -> tuple[int, int]:
+def _slow_mover_frames(
+    frames, carry: float, floor_px: float = VelocityRayConfig.floor_px
+) -> tuple[int, int]:
     """(frames with a region on the mover, regions touching no mover pixel)."""
     md = MotionDetector("constraint-ray", VelocityRayConfig(carry=carry, floor_px=floor_px))
     on, off = 0, 0
@@ -437,9 +439,9 @@ def test_a_mover_too_slow_for_one_frame_is_found_by_the_summed_residual():
     # footage sets it; the floor stands for it here), above the summed test's
     # 0.6 px/frame. Measured: 0 frames without the sum, 26 with.
     slow = scene("static", ("smooth",), frames=30, speed=0.25)
-    on, off = _slow_mover_frames(slow, carry=0.0)
+    on, off = _slow_mover_frames(slow, carry=0.0, floor_px=1.0)
     assert on <= 3 and off == 0
-    on, off = _slow_mover_frames(slow, carry=0.75)
+    on, off = _slow_mover_frames(slow, carry=0.75, floor_px=1.0)
     assert on >= 14 and off == 0
     still = scene("static", (), frames=30)
     assert _slow_mover_frames(still, carry=0.75) == (0, 0)

@@ -36,12 +36,11 @@ def frame_to_bgr(frame: av.VideoFrame) -> np.ndarray:
     name = frame.format.name
     if name not in _FOUR_TWO_ZERO or frame.width % 2 or frame.height % 2:
         return frame.to_ndarray(format="bgr24")
-    planes = frame.to_ndarray()  # (3h/2, w): Y, then U and V a quarter each
-    if name == "yuvj420p":
-        h = frame.height
-        planes = np.vstack(
-            [cv2.LUT(planes[:h], _LUMA_TO_VIDEO), cv2.LUT(planes[h:], _CHROMA_TO_VIDEO)]
-        )
+    planes = frame.to_ndarray()  # (3h/2, w), a new array: Y, then U and V a quarter each
+    if name == "yuvj420p":  # rescaled in place
+        luma, chroma = planes[: frame.height], planes[frame.height :]
+        cv2.LUT(luma, _LUMA_TO_VIDEO, dst=luma)
+        cv2.LUT(chroma, _CHROMA_TO_VIDEO, dst=chroma)
     return cv2.cvtColor(planes, cv2.COLOR_YUV2BGR_I420)
 
 
