@@ -210,7 +210,7 @@ class CameraFit:
 
     def determined_beyond(
         self, field: VelocityField, candidates: np.ndarray, tolerance: float,
-        epipole: np.ndarray | None = None,
+        epipole: np.ndarray | None = None, residual: np.ndarray | None = None,
     ) -> np.ndarray:  # fmt: skip
         """``candidates`` narrowed to the pixels whose *determined* residual
         (:func:`~motiondetect.measurement.aperture.determined` over the
@@ -225,7 +225,7 @@ class CameraFit:
         if not out.any():
             return out
         ys, xs = np.nonzero(out)
-        residual = self.residual_px[ys, xs]
+        residual = (self.residual_px if residual is None else residual)[ys, xs]
         if self.aperture_energy > 0:
             tensor = tuple(t[ys, xs] for t in field.structure)
             residual = determined(residual, tensor, self.aperture_energy)

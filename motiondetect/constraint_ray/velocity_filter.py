@@ -17,7 +17,11 @@ that segment on the gradient; here the velocity itself is tested.
 A point is flagged when it lies off the ray by more than a tolerance set
 by the frame's measured noise (``noise_sigmas`` robust sigmas of the
 plane's inliers, ``spread_sigmas`` robust sigmas of the whole frame's
-residual, which carries its rigid parallax, and at least ``floor_px``).
+off-ray distance, and at least ``floor_px``). Under the fit that distance
+carries the rigid parallax the plane leaves; under known ego-motion, the
+pose's and the lens's errors. Either way a seed must also lie off the ray
+in the part of its velocity the image determines (the aperture test), and
+where the image changed once the plane's motion is undone.
 Flagged points are grown by hysteresis over their neighbours that lie off
 the ray by half as much, so a mover is found whole rather than at its
 strongest edges. Movers that travel *along* their ray are invisible to
@@ -68,10 +72,12 @@ class VelocityRayConfig:
         texture, content entering the frame) are left to the aperture test
         (``FitConfig.aperture_noise``) and the frame-edge band.
     spread_sigmas : float
-        Under the fitted motion the tolerance is also at least this many
-        robust sigmas of the whole frame's plane residual
-        (``CameraFit.spread_px``): the rigid parallax the plane leaves is
-        measured per frame, not assumed.
+        The tolerance is also at least this many robust sigmas of the whole
+        frame's off-ray distance. Under the fitted motion that is the plane
+        residual (``CameraFit.spread_px``): the rigid parallax the plane
+        leaves is measured per frame, not assumed. Under known ego-motion it
+        is the distance off the known segments: what the given poses and the
+        unmodelled lens distortion leave.
     known_floor_px : float
         Smallest tolerance under known ego-motion, which leaves no parallax
         unmodelled (the normal-flow filter's floor).
@@ -121,8 +127,9 @@ class VelocityRayConfig:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
 
 
-def distance_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):
-    """Distance of each velocity from the segment ``start + s * step``, ``s`` in [0, bound].
+def gap_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):
+    """Each velocity minus the nearest point of the segment ``start + s * step``,
+    ``s`` in [0, bound].
 
     Parameters
     ----------
@@ -131,22 +138,29 @@ def distance_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarra
 
     Returns
     -------
-    (...) ndarray of float32
+    (..., 2) ndarray of float32, px/frame
     """
     d = velocity - start
     length2 = (step * step).sum(axis=-1)
     s = np.where(length2 > 1e-12, (d * step).sum(axis=-1) / np.maximum(length2, 1e-12), 0.0)
     s = np.clip(s, 0.0, bound)[..., None]
-    gap = d - s * step
+    return (d - s * step).astype(np.float32)
+
+
+def distance_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):
+    """Distance of each velocity from the segment ``start + s * step``, ``s`` in
+    [0, bound], (...) float32: the length of :func:`gap_to_segment`."""
+    gap = gap_to_segment(velocity, start, step, bound)
     return np.hypot(gap[..., 0], gap[..., 1]).astype(np.float32)
 
 
-def known_ray_distance(field: VelocityField, model: ObserverMotion) -> np.ndarray:
-    """Off-ray distance under known ego-motion, (h, w) float32 work px/frame."""
+def known_ray_gap(field: VelocityField, model: ObserverMotion) -> np.ndarray:
+    """Under known ego-motion, each velocity's offset from its point's
+    segment ``V_w + s V_XY``, (h, w, 2) float32 work px/frame."""
     h, w = field.shape
     start = cv2.resize(model.rotation_px, (w, h), interpolation=cv2.INTER_LINEAR)
     step = cv2.resize(model.translation_px, (w, h), interpolation=cv2.INTER_LINEAR)
-    return distance_to_segment(field.velocity_px, start, step, model.depth_bound)
+    return gap_to_segment(field.velocity_px, start, step, model.depth_bound)
 
 
 class VelocityRayDetector:
@@ -226,6 +240,30 @@ class VelocityRayDetector:
         keep[np.unique(labels[found])] = False
         return keep[labels]
 
+    def _off_ray(
+        self, field: VelocityField, fit: CameraFit, known: ObserverMotion | None
+    ) -> tuple[np.ndarray, float, np.ndarray | None]:
+        """Each pixel's distance off its ray, (h, w) float32; the tolerance;
+        and, under known ego-motion, the offsets the distance measures
+        (None: the fit's residual, tested across the fitted ray)."""
+        cfg = self.config
+        if known is None:
+            distance = off_ray(
+                fit.residual_px, field.pixel_grid, fit.epipole, fit.residual_length()
+            )
+            spread = fit.spread_px
+            floor = cfg.floor_px
+        else:
+            gap = known_ray_gap(field, known)
+            distance = vector_length(gap)
+            # What the known motion leaves: DIS's error, the pose's error and
+            # the lens's distortion, measured over the frame like the fit's.
+            step = _SPREAD_STEP
+            spread = residual_spread(distance[step:-step:step, step:-step:step])
+            floor = cfg.known_floor_px
+        tolerance = max(floor, cfg.noise_sigmas * fit.noise_px, cfg.spread_sigmas * spread)
+        return distance, tolerance, None if known is None else gap
+
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         """Detect independent motion in one frame's velocity field."""
         cfg = self.config
@@ -237,24 +275,16 @@ class VelocityRayDetector:
         if not fit.reliable and known is None:
             self._carried = None
             return DetectorOutput.empty(field.shape, camera=fit)
-        floor = cfg.floor_px if known is None else cfg.known_floor_px
-        tolerance = max(floor, cfg.noise_sigmas * fit.noise_px)
-        if known is None:
-            tolerance = max(tolerance, cfg.spread_sigmas * fit.spread_px)
-        if known is not None:
-            distance = known_ray_distance(field, known)
-        else:
-            distance = off_ray(
-                fit.residual_px, field.pixel_grid, fit.epipole, fit.residual_length()
-            )
+        distance, tolerance, residual = self._off_ray(field, fit, known)
         distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
         changed = None
-        if cfg.evidence_sigmas > 0 and known is None and fit.plane_difference is not None:
+        if cfg.evidence_sigmas > 0 and fit.plane_difference is not None:
             changed = fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
             seeds &= changed
-        if known is None:  # the cheap gates first: this one is per pixel
-            seeds = fit.determined_beyond(field, seeds, tolerance, fit.epipole)
+        # The cheap gates first: this one is per pixel.
+        epipole = fit.epipole if known is None else None
+        seeds = fit.determined_beyond(field, seeds, tolerance, epipole, residual)
         if field.tracked is not None:  # a track's pixels seed from the growth threshold
             held = field.tracked & (distance > cfg.grow_ratio * tolerance)
             seeds |= held if changed is None else held & changed
