@@ -5,7 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from motiondetect.constraint_ray.camera_fit import FitConfig, explained_share
 from motiondetect.measurement.aperture import determined, structure_tensor
+from motiondetect.measurement.dense_flow import VelocityField, pixel_grid
+from motiondetect.measurement.normal_flow import GridGeometry
 
 
 def stripes(shape=(64, 64), period=8):
@@ -48,3 +51,26 @@ def test_a_two_dimensional_pattern_determines_the_whole_motion():
 def test_a_blank_patch_determines_nothing():
     grey = np.full((64, 64), 90, np.uint8)
     assert np.allclose(at_centre((3.0, -1.0), grey, 4.0), 0.0)
+
+
+@pytest.mark.parametrize(
+    ("pattern", "residual", "share"),
+    [(stripes, (0.0, 3.0), 1.0), (stripes, (3.0, 0.0), 0.0), (checks, (0.0, 3.0), 0.0)],
+)
+def test_the_fit_confidence_counts_only_what_the_image_determines(pattern, residual, share):
+    """No sample is a RANSAC inlier; a 3 px residual along stripes is the
+    flow's fill-in and does not count against the plane, one the image
+    determines does."""
+    grey = pattern()
+    h, w = grey.shape
+    zero = np.zeros((h, w, 2), np.float32)
+    field = VelocityField(
+        zero, grey, grey, GridGeometry((w, h), (w, h)), pixel_grid(w, h), patch_px=9
+    )
+    config = FitConfig()
+    step = config.sample_step_px
+    n = grey[step:-step:step, step:-step:step].size
+    sampled = np.tile(np.float32(residual), (n, 1))
+    got = explained_share(field, sampled, np.zeros(n, bool), 4.0, config)
+    assert got == share
+    assert explained_share(field, sampled, np.ones(n, bool), 4.0, config) == 1.0

@@ -50,7 +50,9 @@ class FitConfig:
     ransac_px : float
         RANSAC inlier threshold, work px/frame.
     min_inlier_share : float
-        Below this share of homography inliers the frame cannot be judged.
+        Below this share of samples the homography explains (as far as the
+        image determines them: :func:`explained_share`) the frame cannot be
+        judged.
     max_speed_px : float
         Median speed above which the motion is outside the measurable band.
     cut_grey : float
@@ -148,7 +150,9 @@ class CameraFit:
     noise_px : float
         Robust sigma of one residual component, from the RANSAC inliers.
     inlier_share : float
-        Share of samples the homography explains: the fit's confidence.
+        Share of samples the homography explains, as far as the image
+        determines their motion (:func:`explained_share`): the fit's
+        confidence. The noise is measured on the RANSAC inliers alone.
     epipole : (3,) ndarray of float64 or None
         Homogeneous epipole in work pixels (third component 0: at infinity);
         None when there is no usable parallax.
@@ -337,6 +341,43 @@ def residual_spread(magnitude: np.ndarray) -> float:
     return float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if magnitude.size else 0.0
 
 
+def explained_share(
+    field: VelocityField,
+    sampled: np.ndarray,
+    inliers: np.ndarray,
+    change_noise: float,
+    config: FitConfig,
+) -> float:
+    """Share of the samples the plane explains as far as the image determines.
+
+    A sample counts when it is a RANSAC inlier or when the part of its
+    residual the image determines (:func:`~motiondetect.measurement.aperture.determined`,
+    the energy of ``FitConfig.aperture_noise``, the same test the seeds pass)
+    is within ``ransac_px``: a residual along motion-blurred grass or a
+    straight edge is DIS's fill-in, not evidence against the plane, and could
+    not flag anything either.
+
+    Parameters
+    ----------
+    field : VelocityField
+    sampled : (N, 2) ndarray of float32
+        The plane residual at the RANSAC samples, work px/frame.
+    inliers : (N,) ndarray of bool
+    change_noise : float
+        ``CameraFit.change_noise``, grey levels.
+    config : FitConfig
+    """
+    if not len(inliers):
+        return 0.0
+    if config.aperture_noise <= 0:
+        return float(inliers.mean())
+    step = config.sample_step_px
+    tensor = tuple(t[step:-step:step, step:-step:step].reshape(-1) for t in field.structure)
+    energy = (config.aperture_noise * change_noise) ** 2
+    length = vector_length(determined(sampled, tensor, energy))
+    return float((inliers | (length < config.ransac_px)).mean())
+
+
 def fit_camera(
     field: VelocityField,
     config: FitConfig,
@@ -361,8 +402,15 @@ def fit_camera(
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
     homography, inliers = fit_homography(points, velocity, config.ransac_px)
-    share = float(inliers.mean()) if len(inliers) else 0.0
     difference = None if homography is None else plane_difference(field, homography)
+    change_noise = None if difference is None else difference_noise(difference)
+    residual = sampled = None
+    share = float(inliers.mean()) if len(inliers) else 0.0
+    if homography is not None:
+        residual = plane_residual(field, homography)
+        step = config.sample_step_px
+        sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
+        share = explained_share(field, sampled, inliers, change_noise, config)
     cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
     sharp = sharpness(field.grey)
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
@@ -372,9 +420,6 @@ def fit_camera(
         return CameraFit(
             homography, None, 0.0, share, None, reason, speed, edge_band_px=edge, sharpness=sharp
         )
-    residual = plane_residual(field, homography)
-    step = config.sample_step_px
-    sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
     magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
     noise = float(np.median(magnitude[inliers]) * _MEDIAN_TO_SIGMA) if inliers.any() else 0.0
     epipole = None
@@ -389,7 +434,6 @@ def fit_camera(
             previous_epipole,
         )
     spread = residual_spread(magnitude)
-    change_noise = difference_noise(difference)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         change_noise, sharp, (config.aperture_noise * change_noise) ** 2,
