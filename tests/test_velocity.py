@@ -80,6 +80,14 @@ def test_fit_explains_a_rigid_planar_scene():
     assert fit.epipole is None  # a plane has no parallax
 
 
+def test_a_judged_field_keeps_the_maps_already_computed():
+    field = _field(background(0.0), background(3.0, 1.0))
+    structure, source = field.structure, field.source_px
+    judged = field.judged(fit_camera(field, FitConfig()))
+    assert judged.camera is not None and judged.structure is structure
+    assert judged.source_px is source and judged.velocity_px is field.velocity_px
+
+
 def test_a_cut_is_unreliable_and_flags_nothing():
     md = MotionDetector()
     md.process(background(0.0), 0, 0.0)

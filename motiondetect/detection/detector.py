@@ -250,7 +250,7 @@ class MotionDetector:
         self._sharpness.append(fit.sharpness)
         self._epipole = fit.epipole
         tracked = self.tracker.predicted_mask(flow.shape) if self.tracker.config.prior else None
-        flow = dataclasses.replace(flow, camera=fit, tracked=tracked)
+        flow = flow.judged(fit, tracked)
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         judged = [out.camera for out in outputs.values() if out.camera is not None]
         camera = judged[0] if judged else fit

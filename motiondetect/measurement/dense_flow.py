@@ -13,6 +13,7 @@ built from it line up with the frame being reported.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Literal
@@ -113,6 +114,16 @@ class VelocityField:
     @property
     def shape(self) -> tuple[int, int]:
         return self.grey.shape
+
+    def judged(self, camera: Any, tracked: np.ndarray | None = None) -> VelocityField:
+        """This field with its observer motion (and track prior) attached,
+        keeping the maps already computed from the velocity and the frame
+        (``source_px``, ``structure``): they do not depend on either."""
+        out = dataclasses.replace(self, camera=camera, tracked=tracked)
+        for name in ("source_px", "structure"):
+            if name in self.__dict__:
+                out.__dict__[name] = self.__dict__[name]
+        return out
 
     @cached_property
     def source_px(self) -> np.ndarray:
