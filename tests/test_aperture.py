@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motiondetect.constraint_ray.camera_fit import FitConfig, explained_share
+from motiondetect.constraint_ray.plane import explained_share
 from motiondetect.measurement.aperture import determined, structure_tensor
 from motiondetect.measurement.dense_flow import VelocityField, pixel_grid
 from motiondetect.measurement.normal_flow import GridGeometry
@@ -67,10 +67,9 @@ def test_the_fit_confidence_counts_only_what_the_image_determines(pattern, resid
     field = VelocityField(
         zero, grey, grey, GridGeometry((w, h), (w, h)), pixel_grid(w, h), patch_px=9
     )
-    config = FitConfig()
-    step = config.sample_step_px
+    step, energy = 8, 16.0  # the samples' grid; 4 grey levels of noise, squared
     n = grey[step:-step:step, step:-step:step].size
     sampled = np.tile(np.float32(residual), (n, 1))
-    got = explained_share(field, sampled, np.zeros(n, bool), 4.0, config)
-    assert got == share
-    assert explained_share(field, sampled, np.ones(n, bool), 4.0, config) == 1.0
+    assert explained_share(field, sampled, np.zeros(n, bool), energy, step, 1.0) == share
+    assert explained_share(field, sampled, np.ones(n, bool), energy, step, 1.0) == 1.0
+    assert explained_share(field, sampled, np.zeros(n, bool), 0.0, step, 1.0) == 0.0

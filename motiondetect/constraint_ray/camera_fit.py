@@ -29,12 +29,18 @@ import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.epipole import fit_epipole, off_ray
+from motiondetect.constraint_ray.plane import (
+    MEDIAN_TO_SIGMA,
+    explained_share,
+    fit_homography,
+    plane_residual,
+    residual_spread,
+    samples,
+)
 from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
 
-#: Gaussian 2-D noise: median |r| = sigma * sqrt(2 ln 2).
-_MEDIAN_TO_SIGMA = 1.0 / np.sqrt(2.0 * np.log(2.0))
 #: Median speed below which a frame without parallax counts as static, px/frame.
 STATIC_SPEED_PX = 0.3
 
@@ -280,49 +286,6 @@ class CameraFit:
         }
 
 
-def samples(field: VelocityField, step: int) -> tuple[np.ndarray, np.ndarray]:
-    """Grid samples away from the border: points and their velocities, (N, 2) each."""
-    h, w = field.shape
-    b = step
-    pts = field.pixel_grid[b : h - b : step, b : w - b : step].reshape(-1, 2)
-    vel = field.velocity_px[b : h - b : step, b : w - b : step].reshape(-1, 2)
-    return pts, vel
-
-
-def plane_residual(field: VelocityField, homography: np.ndarray) -> np.ndarray:
-    """Velocity left after the dominant plane's, at every work pixel.
-
-    Returns
-    -------
-    (h, w, 2) ndarray of float32, work px/frame
-    """
-    grid = field.pixel_grid
-    h, w = field.shape
-    previous = cv2.perspectiveTransform(grid.reshape(-1, 1, 2), homography).reshape(h, w, 2)
-    plane_velocity = grid - previous
-    return (field.velocity_px - plane_velocity).astype(np.float32)
-
-
-def fit_homography(
-    points: np.ndarray, velocity: np.ndarray, threshold_px: float
-) -> tuple[np.ndarray | None, np.ndarray]:
-    """RANSAC homography from current points to where they were.
-
-    Returns
-    -------
-    homography : (3, 3) ndarray or None
-    inliers : (N,) ndarray of bool
-    """
-    if len(points) < 8:
-        return None, np.zeros(len(points), bool)
-    homography, mask = cv2.findHomography(
-        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
-    )
-    if homography is None or mask is None:
-        return None, np.zeros(len(points), bool)
-    return homography, mask.ravel().astype(bool)
-
-
 def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     if homography is None or share < config.min_inlier_share:
         return "too few inliers"
@@ -333,49 +296,6 @@ def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     if blurred:
         return "heavy blur"
     return ""
-
-
-def residual_spread(magnitude: np.ndarray) -> float:
-    """Robust sigma of residual vectors from their lengths (any shape): the
-    median of a 2-D Gaussian's length over sqrt(2 ln 2). 0 when empty."""
-    return float(np.median(magnitude) * _MEDIAN_TO_SIGMA) if magnitude.size else 0.0
-
-
-def explained_share(
-    field: VelocityField,
-    sampled: np.ndarray,
-    inliers: np.ndarray,
-    change_noise: float,
-    config: FitConfig,
-) -> float:
-    """Share of the samples the plane explains as far as the image determines.
-
-    A sample counts when it is a RANSAC inlier or when the part of its
-    residual the image determines (:func:`~motiondetect.measurement.aperture.determined`,
-    the energy of ``FitConfig.aperture_noise``, the same test the seeds pass)
-    is within ``ransac_px``: a residual along motion-blurred grass or a
-    straight edge is DIS's fill-in, not evidence against the plane, and could
-    not flag anything either.
-
-    Parameters
-    ----------
-    field : VelocityField
-    sampled : (N, 2) ndarray of float32
-        The plane residual at the RANSAC samples, work px/frame.
-    inliers : (N,) ndarray of bool
-    change_noise : float
-        ``CameraFit.change_noise``, grey levels.
-    config : FitConfig
-    """
-    if not len(inliers):
-        return 0.0
-    if config.aperture_noise <= 0:
-        return float(inliers.mean())
-    step = config.sample_step_px
-    tensor = tuple(t[step:-step:step, step:-step:step].reshape(-1) for t in field.structure)
-    energy = (config.aperture_noise * change_noise) ** 2
-    length = vector_length(determined(sampled, tensor, energy))
-    return float((inliers | (length < config.ransac_px)).mean())
 
 
 def fit_camera(
@@ -405,12 +325,13 @@ def fit_camera(
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
     residual = sampled = None
-    share = float(inliers.mean()) if len(inliers) else 0.0
+    share, energy = (float(inliers.mean()) if len(inliers) else 0.0), 0.0
     if homography is not None:
         residual = plane_residual(field, homography)
         step = config.sample_step_px
         sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
-        share = explained_share(field, sampled, inliers, change_noise, config)
+        energy = (config.aperture_noise * change_noise) ** 2
+        share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
     cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
     sharp = sharpness(field.grey)
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
@@ -421,20 +342,16 @@ def fit_camera(
             homography, None, 0.0, share, None, reason, speed, edge_band_px=edge, sharpness=sharp
         )
     magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
-    noise = float(np.median(magnitude[inliers]) * _MEDIAN_TO_SIGMA) if inliers.any() else 0.0
+    noise = float(np.median(magnitude[inliers]) * MEDIAN_TO_SIGMA) if inliers.any() else 0.0
     epipole = None
     if config.parallax:
         big = magnitude > config.parallax_sigmas * max(noise, 0.05)
         epipole = fit_epipole(
-            points[big],
-            sampled[big],
-            2.0 * max(noise, 0.1),
-            field.shape,
-            config.min_parallax_blocks,
-            previous_epipole,
-        )
+            points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape,
+            config.min_parallax_blocks, previous_epipole,
+        )  # fmt: skip
     spread = residual_spread(magnitude)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
-        change_noise, sharp, (config.aperture_noise * change_noise) ** 2,
+        change_noise, sharp, energy,
     )  # fmt: skip

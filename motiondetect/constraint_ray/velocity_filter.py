@@ -41,14 +41,10 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.camera_fit import (
-    CameraFit,
-    FitConfig,
-    fit_camera,
-    residual_spread,
-)
+from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
+from motiondetect.constraint_ray.plane import residual_spread
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import hysteresis, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
