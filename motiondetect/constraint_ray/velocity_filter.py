@@ -46,7 +46,7 @@ from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.constraint_ray.plane import residual_spread
 from motiondetect.detection.base import DetectorOutput
-from motiondetect.detection.regions import hysteresis, without_frame_edge
+from motiondetect.detection.regions import components, hysteresis, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 NAME = "velocity-ray"
@@ -230,10 +230,10 @@ class VelocityRayDetector:
         slow = hysteresis(distance, tolerance, self.config.grow_ratio, seeds)
         if not slow.any():
             return slow
-        count, labels = cv2.connectedComponents(slow.astype(np.uint8), connectivity=8)
+        count, labels = components(slow)
         keep = np.ones(count, bool)
         keep[0] = False
-        keep[np.unique(labels[found])] = False
+        keep[labels[found]] = False
         return keep[labels]
 
     def _off_ray(

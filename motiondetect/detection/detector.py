@@ -30,7 +30,7 @@ from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import ChangeHistory
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
-from motiondetect.detection.regions import Region, find_regions, regions_mask
+from motiondetect.detection.regions import Region, components, find_regions, regions_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.stages import GRID
@@ -316,7 +316,7 @@ def _slow_parts(flagged: np.ndarray, speed: np.ndarray, track: TrackConfig) -> n
     them no farther than ``support_px`` over ``support_frames - 1`` frames,
     (h, w) bool: there the longer-baseline change adds a slow mover's plain
     body; a faster mover would add the trail it left."""
-    count, labels = cv2.connectedComponents(flagged.astype(np.uint8), connectivity=8)
+    count, labels = components(flagged)
     inside = labels[flagged]
     sums = np.bincount(inside, weights=speed[flagged], minlength=count)
     sizes = np.bincount(inside, minlength=count)
