@@ -1,9 +1,11 @@
 """Regression on the committed sample videos and their exact ground truth.
 
 Measured with the defaults (object recall / cell F1 / false-alarm regions
-per frame). The bounds sit just past these figures, so any regression fails;
-improvements should tighten them. The high false-alarm counts of the
-parallax-rich scenes are the velocity path's known weakness (docs/detectors.md).
+per frame), and with each clip's true camera motion. The bounds sit just past
+these figures, so any regression fails; improvements should tighten them.
+The rigid-only scene's false alarms (DIS's errors at the near boxes' edges
+and along the brick wall's lines) are the velocity path's known weakness
+(docs/detectors.md).
 """
 
 from __future__ import annotations

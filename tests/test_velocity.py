@@ -18,7 +18,7 @@ from skimage import data
 from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
 from motiondetect.constraint_ray.epipole import off_ray
-from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, distance_to_segment
+from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, gap_to_segment
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker
 from motiondetect.io.source import SourceFrame
@@ -117,8 +117,9 @@ def test_off_ray_measures_across_the_line_to_the_epipole():
 def test_distance_to_the_constraint_segment():
     start, step = np.array([1.0, 0.0]), np.array([2.0, 0.0])
     v = np.array([[1.0, 0.0], [4.0, 0.0], [9.0, 0.0], [2.0, 3.0], [-2.0, 0.0]])
-    got = distance_to_segment(v, start, step, bound=3.0)  # segment from x=1 to x=7
-    np.testing.assert_allclose(got, [0.0, 0.0, 2.0, 3.0, 3.0], atol=1e-6)
+    gap = gap_to_segment(v, start, step, bound=3.0)  # segment from x=1 to x=7
+    np.testing.assert_allclose(gap, [[0, 0], [0, 0], [2, 0], [0, 3], [-3, 0]], atol=1e-6)
+    np.testing.assert_allclose(np.hypot(*gap.T), [0.0, 0.0, 2.0, 3.0, 3.0], atol=1e-6)
 
 
 def _pan_with_mover(path, frames=24, pan=2.0):

@@ -143,13 +143,6 @@ def gap_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bo
     return (d - s * step).astype(np.float32)
 
 
-def distance_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):
-    """Distance of each velocity from the segment ``start + s * step``, ``s`` in
-    [0, bound], (...) float32: the length of :func:`gap_to_segment`."""
-    gap = gap_to_segment(velocity, start, step, bound)
-    return np.hypot(gap[..., 0], gap[..., 1]).astype(np.float32)
-
-
 def known_ray_gap(field: VelocityField, model: ObserverMotion) -> np.ndarray:
     """Under known ego-motion, each velocity's offset from its point's
     segment ``V_w + s V_XY``, (h, w, 2) float32 work px/frame."""
