@@ -117,12 +117,12 @@ class VelocityField:
 
     def judged(self, camera: Any, tracked: np.ndarray | None = None) -> VelocityField:
         """This field with its observer motion (and track prior) attached,
-        keeping the maps already computed from the velocity and the frame
-        (``source_px``, ``structure``): they do not depend on either."""
+        keeping every map already computed from the velocity and the frame
+        (the cached properties, ``source_px`` and ``structure``): they
+        depend on neither."""
         out = dataclasses.replace(self, camera=camera, tracked=tracked)
-        for name in ("source_px", "structure"):
-            if name in self.__dict__:
-                out.__dict__[name] = self.__dict__[name]
+        for name, value in self.__dict__.items():
+            out.__dict__.setdefault(name, value)  # fields are set; only caches are missing
         return out
 
     @cached_property
