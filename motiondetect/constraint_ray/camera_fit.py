@@ -54,7 +54,15 @@ class FitConfig:
     sample_step_px : int
         Grid step of the velocity samples fed to RANSAC, work px.
     ransac_px : float
-        RANSAC inlier threshold, work px/frame.
+        RANSAC inlier threshold, work px/frame: what counts as explained by
+        the plane (the inlier share, the noise).
+    refit_sigmas : float
+        The plane is then refit by RANSAC at this many robust sigmas of the
+        first plane's inliers (0: off). At 1 px, far above DIS's 0.1 px
+        error, a compromise plane that keeps a slow mover or a near surface
+        within the threshold counts as many inliers as the dominant plane;
+        at the measured noise scale only the dominant plane keeps most of
+        them (DAVIS cows, docs/detectors.md).
     min_inlier_share : float
         Below this share of samples the homography explains (as far as the
         image determines them: :func:`explained_share`) the frame cannot be
@@ -107,6 +115,7 @@ class FitConfig:
 
     sample_step_px: int = 8
     ransac_px: float = 1.0
+    refit_sigmas: float = 3.0
     min_inlier_share: float = 0.25
     max_speed_px: float = 30.0
     cut_grey: float = 40.0
@@ -132,6 +141,7 @@ class FitConfig:
             ),
             non_negative=(
                 "min_inlier_share",
+                "refit_sigmas",
                 "min_parallax_blocks",
                 "max_flagged_share",
                 "blur_ratio",
@@ -321,7 +331,7 @@ def fit_camera(
     """
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
-    homography, inliers = fit_homography(points, velocity, config.ransac_px)
+    homography, inliers = fit_homography(points, velocity, config.ransac_px, config.refit_sigmas)
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
     residual = sampled = None

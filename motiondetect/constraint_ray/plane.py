@@ -42,24 +42,59 @@ def plane_residual(field: VelocityField, homography: np.ndarray) -> np.ndarray:
     return (field.velocity_px - plane_velocity).astype(np.float32)
 
 
+#: DIS's error on textured motion, work px/frame: the refit never takes the
+#: noise below it (it binds only on a noiseless, synthetic field).
+_DIS_ERROR_PX = 0.1
+
+
+def _ransac(points: np.ndarray, velocity: np.ndarray, threshold_px: float) -> np.ndarray | None:
+    homography, _ = cv2.findHomography(
+        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
+    )
+    return homography
+
+
+def plane_error(points: np.ndarray, velocity: np.ndarray, homography: np.ndarray) -> np.ndarray:
+    """|velocity - the plane's velocity| at each point, (N,) px/frame."""
+    previous = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), homography)
+    return np.hypot(*(previous.reshape(-1, 2) - (points - velocity)).T)
+
+
 def fit_homography(
-    points: np.ndarray, velocity: np.ndarray, threshold_px: float
+    points: np.ndarray, velocity: np.ndarray, threshold_px: float, refit_sigmas: float = 0.0
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """RANSAC homography from current points to where they were.
+
+    With ``refit_sigmas``, the plane found at ``threshold_px`` measures the
+    noise (robust sigma of its inliers' errors) and RANSAC runs again at
+    ``refit_sigmas`` of it. RANSAC's final least-squares step runs over
+    every point within its threshold: at a threshold far above the flow's
+    noise those include a slow mover or a near surface, which pull the
+    plane toward themselves (a compromise that halves their residual). At
+    the measured noise scale only the dominant plane's points remain.
 
     Returns
     -------
     homography : (3, 3) ndarray or None
     inliers : (N,) ndarray of bool
+        Within ``threshold_px`` of the returned plane (the refit changes
+        which plane, not what counts as explained).
     """
     if len(points) < 8:
         return None, np.zeros(len(points), bool)
-    homography, mask = cv2.findHomography(
-        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
-    )
-    if homography is None or mask is None:
+    homography = _ransac(points, velocity, threshold_px)
+    if homography is None:
         return None, np.zeros(len(points), bool)
-    return homography, mask.ravel().astype(bool)
+    error = plane_error(points, velocity, homography)
+    inliers = error < threshold_px
+    if refit_sigmas > 0 and inliers.any():
+        sigma = float(np.median(error[inliers])) * MEDIAN_TO_SIGMA
+        tight = refit_sigmas * max(sigma, _DIS_ERROR_PX)
+        refit = _ransac(points, velocity, tight) if tight < threshold_px else None
+        if refit is not None:
+            homography = refit
+            inliers = plane_error(points, velocity, homography) < threshold_px
+    return homography, inliers
 
 
 def residual_spread(magnitude: np.ndarray) -> float:
