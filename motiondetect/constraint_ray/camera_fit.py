@@ -56,13 +56,12 @@ class FitConfig:
     ransac_px : float
         RANSAC inlier threshold, work px/frame: what counts as explained by
         the plane (the inlier share, the noise).
-    refit_sigmas : float
-        The plane is then refit by RANSAC at this many robust sigmas of the
-        first plane's inliers (0: off). At 1 px, far above DIS's 0.1 px
-        error, a compromise plane that keeps a slow mover or a near surface
-        within the threshold counts as many inliers as the dominant plane;
-        at the measured noise scale only the dominant plane keeps most of
-        them (DAVIS cows, docs/detectors.md).
+    tight_px : float
+        RANSAC also runs at this threshold (three times DIS's 0.1 px error;
+        0: off), and the plane under which the velocities are likelier is
+        kept (:func:`~.plane.fit_homography`): at 1 px a slow mover or a
+        near surface pulls the plane toward itself (docs/detectors.md).
+        The outliers of that likelihood spread over ``max_speed_px``.
     min_inlier_share : float
         Below this share of samples the homography explains (as far as the
         image determines them: :func:`explained_share`) the frame cannot be
@@ -115,7 +114,7 @@ class FitConfig:
 
     sample_step_px: int = 8
     ransac_px: float = 1.0
-    refit_sigmas: float = 3.0
+    tight_px: float = 0.3
     min_inlier_share: float = 0.25
     max_speed_px: float = 30.0
     cut_grey: float = 40.0
@@ -141,7 +140,7 @@ class FitConfig:
             ),
             non_negative=(
                 "min_inlier_share",
-                "refit_sigmas",
+                "tight_px",
                 "min_parallax_blocks",
                 "max_flagged_share",
                 "blur_ratio",
@@ -331,7 +330,9 @@ def fit_camera(
     """
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
-    homography, inliers = fit_homography(points, velocity, config.ransac_px, config.refit_sigmas)
+    homography, inliers = fit_homography(
+        points, velocity, config.ransac_px, config.tight_px, config.max_speed_px
+    )
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
     residual = sampled = None
