@@ -85,6 +85,9 @@ def test_fit_explains_a_rigid_planar_scene():
     assert fit.epipole is None  # a plane has no parallax
 
 
+BAND = FitConfig().max_speed_px  # the likelihood's outliers spread over the measurable band
+
+
 def _pan_samples(seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """An 8-px grid of a (2, 1) px/frame pan with 0.05 px of noise."""
     rng = np.random.default_rng(seed)
@@ -101,8 +104,8 @@ def test_the_likelier_plane_leaves_a_slow_mover_whole(offset):
     points, velocity = _pan_samples()
     mover = (abs(points[:, 0] - 230) < 30) & (abs(points[:, 1] - 100) < 40)
     velocity[mover, 0] += offset
-    plain, _ = fit_homography(points, velocity, 1.0)
-    chosen, inliers = fit_homography(points, velocity, 1.0, tight_px=0.3)
+    plain, _ = fit_homography(points, velocity, 1.0, outlier_px=BAND)
+    chosen, inliers = fit_homography(points, velocity, 1.0, outlier_px=BAND, tight_px=0.3)
     left = np.median(plane_error(points, velocity, plain)[mover])
     whole = np.median(plane_error(points, velocity, chosen)[mover])
     assert left < offset - 0.04  # the compromise absorbs part of the mover
@@ -117,12 +120,13 @@ def test_the_compromise_plane_is_kept_where_no_surface_dominates():
     points, velocity = _pan_samples()
     near = (points[:, 0] // 40 + points[:, 1] // 40) % 2 == 1
     velocity[near, 0] += 0.6
-    plain, _ = fit_homography(points, velocity, 1.0)
-    chosen, _ = fit_homography(points, velocity, 1.0, tight_px=0.3)
+    plain, _ = fit_homography(points, velocity, 1.0, outlier_px=BAND)
+    chosen, _ = fit_homography(points, velocity, 1.0, outlier_px=BAND, tight_px=0.3)
     assert np.allclose(chosen, plain)
-    tight_error = plane_error(points, velocity, fit_homography(points, velocity, 0.3)[0])
+    tight, _ = fit_homography(points, velocity, 0.3, outlier_px=BAND)
+    tight_error = plane_error(points, velocity, tight)
     plain_error = plane_error(points, velocity, plain)
-    assert mixture_log_likelihood(plain_error, 30.0) > mixture_log_likelihood(tight_error, 30.0)
+    assert mixture_log_likelihood(plain_error, BAND) > mixture_log_likelihood(tight_error, BAND)
 
 
 def test_a_judged_field_keeps_the_maps_already_computed():

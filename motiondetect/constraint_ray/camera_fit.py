@@ -331,7 +331,7 @@ def fit_camera(
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
     homography, inliers = fit_homography(
-        points, velocity, config.ransac_px, config.tight_px, config.max_speed_px
+        points, velocity, config.ransac_px, outlier_px=config.max_speed_px, tight_px=config.tight_px
     )
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)

@@ -71,7 +71,7 @@ def mixture_log_likelihood(error: np.ndarray, outlier_px: float) -> float:
     """
     e2 = error.astype(np.float64) ** 2
     floor = _MIN_SIGMA_PX**2
-    var = max(float(np.median(e2)) / (2.0 * np.log(2.0)), floor)
+    var = max(residual_spread(error) ** 2, floor)
     share = float(np.mean(e2 < 9.0 * var))
     outlier = 1.0 / (np.pi * outlier_px**2)
     for _ in range(_EM_ROUNDS):
@@ -88,8 +88,9 @@ def fit_homography(
     points: np.ndarray,
     velocity: np.ndarray,
     threshold_px: float,
+    *,
+    outlier_px: float,
     tight_px: float = 0.0,
-    outlier_px: float = 30.0,
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """RANSAC homography from current points to where they were.
 
