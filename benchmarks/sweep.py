@@ -1,0 +1,117 @@
+r"""Variants of motiondetect side by side, pooled per data set (how docs/detectors.md is measured).
+
+    python benchmarks/sweep.py davis,ucsd,sample,fox '{"default": {}}'
+    python benchmarks/sweep.py davis,sample \
+        '{"default": {}, "vr2": {"dense_flow": {"refinement_iterations": 2}}}'
+    python benchmarks/sweep.py davis '{"dense": {"peer": "DenseResidual"}}' --per-sequence
+
+Each variant is a JSON object of config sections, named as in a config file
+(``fit``, ``velocity_ray``, ``velocity_animate``, ``track``, ``dense_flow``:
+``motiondetect.app.settings.SECTIONS``), each with the fields it changes;
+``"detector"`` picks the detectors (default ``both``), and ``"peer"`` runs one
+of ``compare.py``'s peers instead (``DenseResidual``, ``Mog2``, ...). Data sets
+are the prefixes of ``compare.py``'s sequence names: ``sample``, ``davis``,
+``ucsd``, ``sbi``, ``otb``, ``fox``. Scoring is ``compare.py``'s, frames 0-1
+unscored; sequences run in parallel (``--jobs``), one OpenCV thread each.
+Set ``MOTIONDETECT_DATA`` to score another copy of the clips (for example
+every 2nd frame, from ``benchmarks/subsample.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from multiprocessing import Pool
+
+import compare
+import cv2
+
+from motiondetect.app.settings import SECTIONS
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.tools.evaluate import Counts
+
+
+class Variant:
+    """One variant as a per-frame method of ``compare.run_sequence``."""
+
+    def __init__(self, name: str, spec: dict) -> None:
+        self.name = name
+        spec = dict(spec)
+        peer = spec.pop("peer", None)
+        if peer is not None:
+            self.method = getattr(compare, peer)()
+            return
+        detector = spec.pop("detector", "both")
+        configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
+        self.detector = MotionDetector(detector, *configs)
+        self.index = 0
+        self.method = self._ours
+
+    def _ours(self, frame):
+        result = self.detector.process(frame, self.index, 0.0)
+        self.index += 1
+        h, w = frame.shape[:2]
+        return result.input_mask(w, h)
+
+    def __call__(self, frame):
+        return self.method(frame)
+
+
+def _run(job: tuple) -> tuple[str, dict[str, Counts]]:
+    name, source, gt, variants = job
+    cv2.setNumThreads(1)
+    methods = [Variant(n, spec) for n, spec in variants.items()]
+    return name, {k: counts for k, (counts, _) in compare.run_sequence(source, gt, methods).items()}
+
+
+def summary(label: str, variant: str, counts: Counts, detail: bool = False) -> str:
+    m = counts.metrics()
+    text = (
+        f"{label:28s} {variant:14s} cell F1 {m['cell_f1'] or 0:.3f}  object recall "
+        f"{m['object_recall'] or 0:.3f} ({counts.objects_hit}/{counts.objects})  "
+        f"FA/frame {m['false_alarm_regions_per_frame'] or 0:.2f}"
+    )
+    if detail:
+        flagged = max(counts.cell_tp + counts.cell_fp, 1)
+        positive = max(counts.cell_tp + counts.cell_fn, 1)
+        text += f"  cell P {counts.cell_tp / flagged:.2f} R {counts.cell_tp / positive:.2f}"
+    return text
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("datasets", help="comma-separated: sample,davis,ucsd,sbi,otb,fox")
+    parser.add_argument("variants", help="JSON object: variant name -> config sections")
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--per-sequence", action="store_true")
+    args = parser.parse_args()
+    try:  # fail before any clip is read
+        variants = json.loads(args.variants)
+        for spec in variants.values():
+            Variant("check", spec)
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+        parser.error(f"bad variants: {exc}")
+    groups = args.datasets.split(",")
+    jobs = [
+        (name, source, gt, variants)
+        for name, source, gt, _ in compare.sequences(quick=False)
+        if any(name.startswith(g) for g in groups)
+    ]
+    with Pool(args.jobs) as pool:
+        results = pool.map(_run, jobs, chunksize=1)
+    for group in groups:
+        for variant in variants:
+            pooled = Counts()
+            for name, counts in results:
+                if name.startswith(group):
+                    pooled.add(counts[variant])
+                    if args.per_sequence:
+                        print(summary("  " + name, variant, counts[variant], True))
+            print(summary(group, variant, pooled), flush=True)
+
+
+if __name__ == "__main__":
+    main()
