@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import re
 from pathlib import Path
 
+import click
 import pytest
 from click.testing import CliRunner
 from motiondetect_cli.detect import detect
@@ -69,6 +71,23 @@ def test_every_option_is_a_setting_and_every_setting_an_option():
     params = {p.name for p in detect.params} - presentation
     settable = set(RUN_DEFAULTS) | set(CONFIG_OPTIONS)
     assert params == settable
+
+
+def test_every_option_is_in_the_cli_docs():
+    """docs/cli.md's table names every option of ``detect`` (it had drifted:
+    ten options missing, a wrong working-size default)."""
+    text = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    table = text[text.index("## Options") : text.index("## Outputs")]
+    missing = [
+        p.opts[-1]
+        for p in detect.params
+        if isinstance(p, click.Option)
+        and not any(
+            re.search(rf"(?<![\w-]){re.escape(o)}(?![\w-])", table)
+            for o in p.opts + p.secondary_opts
+        )
+    ]
+    assert missing == []
 
 
 def test_every_config_field_is_reachable_from_toml(tmp_path):
