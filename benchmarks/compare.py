@@ -136,8 +136,8 @@ class DenseResidual:
 
 
 class Ours:
-    def __init__(self, detector="both", egomotion=None, label=None, measure="velocity"):
-        self.md = MotionDetector(detector, measure=measure, egomotion=egomotion)
+    def __init__(self, detector="both", egomotion=None, label=None, measure="velocity", configs=()):
+        self.md = MotionDetector(detector, *configs, measure=measure, egomotion=egomotion)
         self.name = label or f"motiondetect {measure} {detector}"
         self.index = 0
 

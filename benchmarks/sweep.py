@@ -28,40 +28,26 @@ import compare
 import cv2
 
 from motiondetect.app.settings import SECTIONS
-from motiondetect.detection.detector import MotionDetector
 from motiondetect.tools.evaluate import Counts
 
 
-class Variant:
-    """One variant as a per-frame method of ``compare.run_sequence``."""
-
-    def __init__(self, name: str, spec: dict) -> None:
-        self.name = name
-        spec = dict(spec)
-        peer = spec.pop("peer", None)
-        if peer is not None:
-            self.method = getattr(compare, peer)()
-            return
-        detector = spec.pop("detector", "both")
-        configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
-        self.detector = MotionDetector(detector, *configs)
-        self.index = 0
-        self.method = self._ours
-
-    def _ours(self, frame):
-        result = self.detector.process(frame, self.index, 0.0)
-        self.index += 1
-        h, w = frame.shape[:2]
-        return result.input_mask(w, h)
-
-    def __call__(self, frame):
-        return self.method(frame)
+def method(name: str, spec: dict):
+    """One variant as a per-frame method of ``compare.run_sequence``, named ``name``."""
+    spec = dict(spec)
+    peer = spec.pop("peer", None)
+    if peer is not None:
+        made = getattr(compare, peer)()
+        made.name = name
+        return made
+    detector = spec.pop("detector", "both")
+    configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
+    return compare.Ours(detector, label=name, configs=configs)
 
 
 def _run(job: tuple) -> tuple[str, dict[str, Counts]]:
     name, source, gt, variants = job
     cv2.setNumThreads(1)
-    methods = [Variant(n, spec) for n, spec in variants.items()]
+    methods = [method(n, spec) for n, spec in variants.items()]
     return name, {k: counts for k, (counts, _) in compare.run_sequence(source, gt, methods).items()}
 
 
@@ -91,7 +77,7 @@ def main() -> None:
     try:  # fail before any clip is read
         variants = json.loads(args.variants)
         for spec in variants.values():
-            Variant("check", spec)
+            method("check", spec)
     except (ValueError, KeyError, TypeError, AttributeError) as exc:
         parser.error(f"bad variants: {exc}")
     groups = args.datasets.split(",")
