@@ -129,6 +129,17 @@ def test_the_compromise_plane_is_kept_where_no_surface_dominates():
     assert mixture_log_likelihood(plain_error, BAND) > mixture_log_likelihood(tight_error, BAND)
 
 
+def test_planes_scored_together_score_as_one_by_one():
+    # fit_homography scores the 1 px and the tight plane in one call; each
+    # row must get exactly the score it gets alone (same EM, same sums).
+    rng = np.random.default_rng(3)
+    errors = [np.abs(rng.standard_t(2, 900)) * s for s in (0.05, 0.3, 1.5)]
+    together = mixture_log_likelihood(np.stack(errors), BAND)
+    alone = [mixture_log_likelihood(e, BAND) for e in errors]
+    assert together.shape == (3,) and list(together) == alone
+    assert alone[0] > alone[1] > alone[2]  # tighter errors are likelier
+
+
 def test_a_judged_field_keeps_the_maps_already_computed():
     field = _field(background(0.0), background(3.0, 1.0))
     structure, source = field.structure, field.source_px

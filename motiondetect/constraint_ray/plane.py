@@ -61,27 +61,35 @@ def plane_error(points: np.ndarray, velocity: np.ndarray, homography: np.ndarray
     return np.hypot(*(previous.reshape(-1, 2) - (points - velocity)).T)
 
 
-def mixture_log_likelihood(error: np.ndarray, outlier_px: float) -> float:
+def mixture_log_likelihood(error: np.ndarray, outlier_px: float) -> np.ndarray | float:
     """Log-likelihood of a plane's errors, (N,) px/frame, under a mixture:
     inliers a 2-D Gaussian of their own sigma, outliers spread evenly over
     the disc of radius ``outlier_px`` (the measurable velocities).
 
     The share and sigma are fitted by a few rounds of EM from the robust
-    estimates (MLESAC's score, Torr and Zisserman 2000).
+    estimates (MLESAC's score, Torr and Zisserman 2000). Errors of several
+    planes at the same points, (K, N), are scored together: (K,) scores.
     """
-    e2 = error.astype(np.float64) ** 2
+    one = np.ndim(error) == 1
+    error = np.atleast_2d(error).astype(np.float64)
+    e2 = error**2
     floor = _MIN_SIGMA_PX**2
-    var = max(residual_spread(error) ** 2, floor)
-    share = float(np.mean(e2 < 9.0 * var))
+    spread = np.median(error, axis=1, keepdims=True) * MEDIAN_TO_SIGMA
+    var = np.maximum(spread**2, floor)
+    share = np.mean(e2 < 9.0 * var, axis=1, keepdims=True)
     outlier = 1.0 / (np.pi * outlier_px**2)
     for _ in range(_EM_ROUNDS):
-        share = min(max(share, 1e-3), 1.0 - 1e-3)
+        share = np.clip(share, 1e-3, 1.0 - 1e-3)
         inlier = share / (2.0 * np.pi * var) * np.exp(-e2 / (2.0 * var))
         density = inlier + (1.0 - share) * outlier
         weight = inlier / density
-        share = float(weight.mean())
-        var = max(float((weight * e2).sum() / (2.0 * max(weight.sum(), 1e-9))), floor)
-    return float(np.log(density).sum())
+        share = weight.mean(axis=1, keepdims=True)
+        total = weight.sum(axis=1, keepdims=True)
+        var = np.maximum(
+            (weight * e2).sum(axis=1, keepdims=True) / (2.0 * np.maximum(total, 1e-9)), floor
+        )
+    scores = np.log(density).sum(axis=1)
+    return float(scores[0]) if one else scores
 
 
 def fit_homography(
@@ -120,9 +128,10 @@ def fit_homography(
     tight = _ransac(points, velocity, tight_px) if 0 < tight_px < threshold_px else None
     if tight is not None:
         tight_error = plane_error(points, velocity, tight)
-        if mixture_log_likelihood(tight_error, outlier_px) > mixture_log_likelihood(
-            error, outlier_px
-        ):
+        loose_score, tight_score = mixture_log_likelihood(
+            np.stack([error, tight_error]), outlier_px
+        )
+        if tight_score > loose_score:
             homography, error = tight, tight_error
     return homography, error < threshold_px
 

@@ -323,4 +323,4 @@ def _slow_parts(flagged: np.ndarray, speed: np.ndarray, track: TrackConfig) -> n
     mean = sums / np.maximum(sizes, 1)
     slow = mean * (track.support_frames - 1) <= track.support_px
     slow[0] = False
-    return slow[labels]
+    return slow.take(labels)

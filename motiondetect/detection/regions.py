@@ -158,7 +158,7 @@ def hysteresis(
     keep = np.zeros(count, bool)
     keep[labels[strong > 0]] = True
     keep[0] = False
-    return keep[labels]
+    return keep.take(labels)
 
 
 def without_frame_edge(distance: np.ndarray, band_px: float) -> np.ndarray:
