@@ -151,7 +151,9 @@ def group_objects(
     min_area = config.min_area_share * h * w
     objects = []
     for label in range(1, count):
-        x, y, bw, bh = stats[label, :4]
+        x, y, bw, bh, joined_area = stats[label, :5]
+        if joined_area < min_area:  # holds at least the object's own pixels
+            continue
         x0, y0 = max(x - pad, 0), max(y - pad, 0)
         x1, y1 = min(x + bw + pad, w), min(y + bh + pad, h)
         own = (labels[y0:y1, x0:x1] == label).astype(np.uint8) & mask[y0:y1, x0:x1]
