@@ -56,6 +56,11 @@ class Frame:
 # ----------------------------------------------------------------------------
 
 
+#: Pixels around a quad's projected box that are ray-cast too: np.gradient's
+#: central differences at the quad's own pixels then match the whole frame's.
+_WINDOW_MARGIN = 3
+
+
 class Renderer:
     """Ray-casts quads through a pinhole camera with trilinear mip-mapping."""
 
@@ -82,30 +87,72 @@ class Renderer:
         best_q = np.full(self.shape, -1, np.int32)
         coords = []
         for qi, quad in enumerate(quads):
-            normal = np.cross(quad.u, quad.v)
-            denom = dirs @ normal
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = ((quad.corner - origin) @ normal) / denom
-            hit = origin + dirs * t[..., None]
-            rel = hit - quad.corner
-            a = rel @ quad.u / (quad.u @ quad.u)
-            b = rel @ quad.v / (quad.v @ quad.v)
-            inside = (t > 1e-3) & (a >= 0) & (a <= 1) & (b >= 0) & (b <= 1) & (t < best_t)
-            best_t[inside] = t[inside]
-            best_q[inside] = qi
-            coords.append((a, b))
+            window = self._window(quad, pose)
+            coords.append(
+                None
+                if window is None
+                else (
+                    window,
+                    *self._intersect(
+                        quad, dirs[window], origin, best_t[window], best_q[window], qi
+                    ),
+                )
+            )
         image = np.zeros((*self.shape, 3), np.float32)
         owner = np.zeros(self.shape, np.uint8)
         for qi, quad in enumerate(quads):
-            sel = best_q == qi
+            if coords[qi] is None:
+                continue
+            window, a, b = coords[qi]
+            sel = best_q[window] == qi
             if not sel.any():
                 continue
-            a, b = coords[qi]
-            image[sel] = self._sample(quad, a, b, sel)
-            owner[sel] = quad.mover
+            image[window][sel] = self._sample(quad, a, b, sel)
+            owner[window][sel] = quad.mover
         rigid = np.isfinite(best_t) & (owner == 0)
         nearest = float(best_t[rigid].min()) if rigid.any() else np.inf
         return image, owner, nearest
+
+    @staticmethod
+    def _intersect(quad, dirs, origin, best_t, best_q, qi):
+        """Hit the quad's plane with ``dirs``; where it is the nearest so far,
+        record depth and index in the views ``best_t``/``best_q``; return the
+        plane coordinates (a, b) of every ray."""
+        normal = np.cross(quad.u, quad.v)
+        denom = dirs @ normal
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((quad.corner - origin) @ normal) / denom
+        hit = origin + dirs * t[..., None]
+        rel = hit - quad.corner
+        a = rel @ quad.u / (quad.u @ quad.u)
+        b = rel @ quad.v / (quad.v @ quad.v)
+        inside = (t > 1e-3) & (a >= 0) & (a <= 1) & (b >= 0) & (b <= 1) & (t < best_t)
+        best_t[inside] = t[inside]
+        best_q[inside] = qi
+        return a, b
+
+    def _window(self, quad: Quad, pose: np.ndarray) -> tuple[slice, slice] | None:
+        """The pixels (supersampled) a quad can cover: the box of its projected
+        corners plus a margin that keeps :meth:`_sample`'s texel gradients
+        those of the whole frame; the whole frame when a corner is behind the
+        camera; None when the box misses the frame."""
+        h, w = self.shape
+        full = (slice(0, h), slice(0, w))
+        corners = quad.corner + np.array([[0, 0], [1, 0], [0, 1], [1, 1]]) @ np.stack(
+            [quad.u, quad.v]
+        )
+        cam = (corners - pose[:3, 3]) @ pose[:3, :3]  # world to camera: R^T (X - o)
+        if (cam[:, 2] <= 1e-3).any():
+            return full
+        intr, ss = self.config.intrinsics, self.config.supersample
+        cols = (cam[:, 0] / cam[:, 2] * intr.fx + intr.cx) * ss - 0.5  # inverse of self.rays
+        rows = (cam[:, 1] / cam[:, 2] * intr.fy + intr.cy) * ss - 0.5
+        m = _WINDOW_MARGIN
+        x0, x1 = max(int(np.floor(cols.min())) - m, 0), min(int(np.ceil(cols.max())) + m + 1, w)
+        y0, y1 = max(int(np.floor(rows.min())) - m, 0), min(int(np.ceil(rows.max())) + m + 1, h)
+        if x0 >= x1 or y0 >= y1:
+            return None
+        return slice(y0, y1), slice(x0, x1)
 
     def _sample(self, quad: Quad, a: np.ndarray, b: np.ndarray, sel: np.ndarray) -> np.ndarray:
         levels = self.textures[quad.texture]
