@@ -83,8 +83,7 @@ class DetectorOutput:
     def from_mask(cls, mask: np.ndarray, strength: np.ndarray, **kwargs) -> DetectorOutput:
         """From a pixel mask and its per-pixel strength (velocity path)."""
         if not mask.any():  # often (a quiet frame, the animate detector): skip the resizing
-            grid = np.zeros((GRID, GRID), bool)
-            return cls(grid, grid.astype(np.float32), mask=mask, pixel_strength=strength, **kwargs)
+            return cls.empty(mask.shape, **kwargs)
         flagged = cells_from_mask(mask)
         cell_strength = cv2.resize(strength, (GRID, GRID), interpolation=cv2.INTER_AREA)
         return cls(

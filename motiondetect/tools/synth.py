@@ -88,16 +88,11 @@ class Renderer:
         coords = []
         for qi, quad in enumerate(quads):
             window = self._window(quad, pose)
-            coords.append(
-                None
-                if window is None
-                else (
-                    window,
-                    *self._intersect(
-                        quad, dirs[window], origin, best_t[window], best_q[window], qi
-                    ),
-                )
-            )
+            if window is None:
+                coords.append(None)
+                continue
+            a, b = self._intersect(quad, dirs[window], origin, best_t[window], best_q[window], qi)
+            coords.append((window, a, b))
         image = np.zeros((*self.shape, 3), np.float32)
         owner = np.zeros(self.shape, np.uint8)
         for qi, quad in enumerate(quads):
@@ -137,13 +132,12 @@ class Renderer:
         those of the whole frame; the whole frame when a corner is behind the
         camera; None when the box misses the frame."""
         h, w = self.shape
-        full = (slice(0, h), slice(0, w))
         corners = quad.corner + np.array([[0, 0], [1, 0], [0, 1], [1, 1]]) @ np.stack(
             [quad.u, quad.v]
         )
         cam = (corners - pose[:3, 3]) @ pose[:3, :3]  # world to camera: R^T (X - o)
         if (cam[:, 2] <= 1e-3).any():
-            return full
+            return slice(0, h), slice(0, w)
         intr, ss = self.config.intrinsics, self.config.supersample
         cols = (cam[:, 0] / cam[:, 2] * intr.fx + intr.cx) * ss - 0.5  # inverse of self.rays
         rows = (cam[:, 1] / cam[:, 2] * intr.fy + intr.cy) * ss - 0.5
