@@ -136,16 +136,25 @@ class DenseResidual:
 
 
 class Ours:
-    def __init__(self, detector="both", egomotion=None, label=None, measure="velocity", configs=()):
+    """motiondetect per frame; with ``frame_skip`` the frames after each judged
+    one get its mask, as ``--frame-skip`` reports them (``MotionDetector.stream``)."""
+
+    def __init__(
+        self, detector="both", egomotion=None, label=None, measure="velocity", configs=(),
+        frame_skip=0,
+    ):  # fmt: skip
         self.md = MotionDetector(detector, *configs, measure=measure, egomotion=egomotion)
         self.name = label or f"motiondetect {measure} {detector}"
         self.index = 0
+        self.every = frame_skip + 1
+        self.held = None
 
     def __call__(self, frame):
-        res = self.md.process(frame, self.index, 0.0)
-        self.index += 1
         h, w = frame.shape[:2]
-        return res.input_mask(w, h)
+        if self.index % self.every == 0:
+            self.held = self.md.process(frame, self.index, 0.0).input_mask(w, h)
+        self.index += 1
+        return self.held
 
 
 def sequences(quick: bool) -> list[tuple[str, Path, Path | None, Path | None]]:

@@ -47,6 +47,11 @@ VARIANTS = {
     "detect both --measure normal, no video": dict(
         detector="both", measure="normal", video=False, timeline=False
     ),
+    "detect both --frame-skip 1, no video": dict(frame_skip=1, video=False, timeline=False),
+    "detect both --frame-skip 2, no video": dict(frame_skip=2, video=False, timeline=False),
+    "detect both --frame-skip 1, annotated H.264": dict(
+        frame_skip=1, video=True, video_format="mp4", timeline=False
+    ),
     "detect constraint-ray only": dict(detector="constraint-ray", video=False, timeline=False),
     "detect animate only": dict(detector="animate", video=False, timeline=False),
 }
@@ -241,14 +246,15 @@ def whole_process(cmd: list[str]) -> float:
 
 
 def real(tmp: Path) -> None:
-    """Whole processes on real clips: detect vs MOG2 (default threads) vs dvr-scan -so."""
+    """Whole processes on real clips: detect (and detect --frame-skip 1) vs MOG2
+    (default threads) vs dvr-scan -so."""
     dvr = shutil.which("dvr-scan")
     for clip in real_clips(tmp):
         out = tmp / "real"
-        ours = whole_process(
-            [sys.executable, "-m", "motiondetect_cli.main", "detect", str(clip), "-o", str(out),
-             "-q", "--no-video", "--overwrite"]
-        )  # fmt: skip
+        detect = [sys.executable, "-m", "motiondetect_cli.main", "detect", str(clip), "-o",
+                  str(out), "-q", "--no-video", "--overwrite"]  # fmt: skip
+        ours = whole_process(detect)
+        skip = whole_process([*detect, "--frame-skip", "1"])
         mog_code = f"import sys;sys.path.insert(0,{str(HERE)!r});from common import mog2_on;"
         mog = whole_process([sys.executable, "-c", mog_code + f"mog2_on({str(clip)!r})"])
         line = f"  {clip.name}: motiondetect {ours:.2f} s, MOG2 {mog:.2f} s ({mog / ours:.2f}x)"
@@ -257,7 +263,8 @@ def real(tmp: Path) -> None:
             line += f", dvr-scan -so {scan:.2f} s ({scan / ours:.2f}x)"
         else:
             line += ", dvr-scan not installed"
-        print(line)
+        line += f"; --frame-skip 1 {skip:.2f} s ({mog / skip:.2f}x MOG2"
+        print(line + (f", {scan / skip:.2f}x dvr-scan)" if dvr else ")"))
 
 
 def ahead(clip: Path, tmp: Path, repeat: int) -> None:

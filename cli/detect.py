@@ -134,6 +134,13 @@ def _d(key: str) -> str:
     default=None,
     help="Animate detector: remove the frame's global jitter shift (on).",
 )
+@click.option(
+    "--frame-skip",
+    type=int,
+    metavar="N",
+    help="Judge one frame in N+1; the N after it carry its detections, marked held_from "
+    f"in frames.jsonl. About N+1 times faster, coarser in time {_d('frame_skip')}.",
+)
 @click.option("--min-event-frames", type=int, help=f"Shortest event {_d('min_event_frames')}.")
 @click.option("--merge-gap-frames", type=int, help=f"Gap bridged {_d('merge_gap_frames')}.")
 @click.option("--pad-frames", type=int, help=f"Event padding {_d('pad_frames')}.")

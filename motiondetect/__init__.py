@@ -56,6 +56,7 @@ def detect(
     measure: str = "velocity",
     fps: float = 30.0,
     persistence: int | None = None,
+    frame_skip: int = 0,
 ) -> Iterator[FrameResult]:
     """Detect independent motion in every frame of ``source``, lazily.
 
@@ -68,6 +69,9 @@ def detect(
         As for :class:`MotionDetector`.
     fps : float
         Frame rate of in-memory frames, for ``time_s``.
+    frame_skip : int
+        Judge every (n+1)-th frame only; the others carry its result,
+        marked ``held_from`` (:meth:`MotionDetector.stream`).
 
     Yields
     ------
@@ -77,9 +81,9 @@ def detect(
     md = MotionDetector(detector, *configs, measure=measure, persistence=persistence)
     if isinstance(source, (str, Path)):
         with open_source(source) as frames:
-            for _, result in md.stream(frames):
+            for _, result in md.stream(frames, frame_skip):
                 yield result
         return
     in_memory = (SourceFrame(i, i / fps, image) for i, image in enumerate(source))
-    for _, result in md.stream(in_memory):
+    for _, result in md.stream(in_memory, frame_skip):
         yield result

@@ -87,6 +87,31 @@ def test_detect_writes_every_output(tmp_path, clip):
     assert mask.shape == (120 * 2, 160 * 2) and set(np.unique(mask)) <= {0, 255}
 
 
+def test_frame_skip_reports_every_frame_with_the_judged_ones_results(tmp_path, clip):
+    result = invoke("detect", clip, "-o", tmp_path, "--frame-skip", "1", "--masks", "-q")
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "pan"
+    summary = check_outputs(out, 16)  # every frame reported and in the video
+    assert summary["totals"]["frames_judged"] == 8
+    records = [json.loads(line) for line in (out / "frames.jsonl").read_text().splitlines()]
+    for record in records:
+        judged = record["frame"] - record["frame"] % 2
+        assert record.get("held_from") == (None if judged == record["frame"] else judged)
+        assert record["detections"] == records[judged]["detections"]
+    assert sum(bool(r["detections"]) for r in records) >= 8
+    masks = sorted((out / "masks").glob("*.png"))
+    assert len(masks) == 16
+    assert np.array_equal(cv2.imread(str(masks[7]), 0), cv2.imread(str(masks[6]), 0))
+
+
+def test_frame_skip_with_known_egomotion_is_one_line_error(tmp_path, clip):
+    scene_json = Path(__file__).resolve().parents[1] / "sample_videos/uniform_rigid/scene.json"
+    result = invoke("detect", clip, "-o", tmp_path, "--frame-skip", "2", "--egomotion", scene_json)
+    assert result.exit_code == 2
+    assert "--frame-skip cannot be combined with --egomotion" in result.output
+    assert "Traceback" not in result.output and not (tmp_path / "pan").exists()
+
+
 def test_finished_inputs_are_skipped_unless_overwrite(tmp_path, clip):
     assert invoke("detect", clip, "-o", tmp_path, "--no-video", "-q").exit_code == 0
     stamp = (tmp_path / "pan" / "summary.json").stat().st_mtime_ns

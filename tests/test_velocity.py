@@ -533,3 +533,41 @@ def test_seeds_are_tested_on_the_motion_the_image_determines():
     kept = _animate_on_sample("uniform_mixed", detector="both")
     before = _animate_on_sample("uniform_mixed", whole, detector="both")
     assert kept[1] >= before[1] - 0.03 and kept[0] < before[0]  # measured 0.26 against 1.19
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_frame_skip_judges_one_frame_in_three_and_holds_its_result(threads):
+    from .scenes import scene
+
+    frames = scene("pan", ("smooth",), frames=16)
+    alone = MotionDetector("both")  # the judged frames only, one at a time
+    expected = {
+        fr.index: alone.process(fr.image, fr.index, fr.index / 30)
+        for fr in frames
+        if fr.index % 3 == 0
+    }
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(threads)
+    try:
+        source = (SourceFrame(fr.index, fr.index / 30, fr.image) for fr in frames)
+        streamed = list(MotionDetector("both").stream(source, frame_skip=2))
+    finally:
+        cv2.setNumThreads(before)
+    assert [f.index for f, _ in streamed] == [fr.index for fr in frames]
+    for frame, result in streamed:
+        judged = frame.index - frame.index % 3
+        want = expected[judged]
+        assert (result.index, result.time_s) == (frame.index, frame.index / 30)
+        assert result.held_from == (None if judged == frame.index else judged)
+        assert [r.bbox for r in result.regions] == [r.bbox for r in want.regions]
+        assert np.array_equal(result.mask, want.mask)
+    boxed = [i for i, r in expected.items() if r.regions]
+    assert len(boxed) >= 3  # frames 0 and 3 are warm-up and the first sighting
+    for i in boxed:  # velocities over three frames still find the mover
+        x, y, w, h = expected[i].regions[0].bbox
+        assert frames[i].mask[y : y + h, x : x + w].any()
+
+
+def test_frame_skip_below_zero_is_refused():
+    with pytest.raises(ValueError, match="frame_skip"):
+        next(MotionDetector("both").stream([], frame_skip=-1))

@@ -223,23 +223,25 @@ def _frames_in_range(source: FrameSource, settings: Settings) -> Iterator[Source
 
 def _detect_frames(
     source: FrameSource, writers: _FrameWriters, settings: Settings, progress: Progress | None
-) -> tuple[EventTimeline, int]:
-    """The per-frame loop; returns the timeline and the number of detections."""
+) -> tuple[EventTimeline, int, int]:
+    """The per-frame loop; returns the timeline, the number of detections and
+    the number of frames judged (the others held a result, ``--frame-skip``)."""
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
-    timeline, detections = EventTimeline(), 0
-    for frame, result in detector.stream(_frames_in_range(source, settings)):
+    timeline, detections, judged = EventTimeline(), 0, 0
+    for frame, result in detector.stream(_frames_in_range(source, settings), settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])
+        judged += result.held_from is None
         timeline.add(
             result.time_s, result.score, result.moving_fraction,
             record["observer_motion"]["class"], record["detections"], result.index,
         )  # fmt: skip
         if progress is not None:
             progress(len(timeline), info.frame_count)
-    return timeline, detections
+    return timeline, detections, judged
 
 
 def _second_passes(
@@ -273,7 +275,7 @@ def _process(
     writers = _FrameWriters(out_dir, settings, source)
     started = time.perf_counter()
     try:
-        timeline, detections = _detect_frames(source, writers, settings, progress)
+        timeline, detections, judged = _detect_frames(source, writers, settings, progress)
     except BaseException:
         writers.close(ok=False)
         raise
@@ -293,6 +295,7 @@ def _process(
         )
     totals = {
         "frames": len(timeline),
+        "frames_judged": judged,
         "frames_with_detections": int(sum(b is not None for b in timeline.boxes)),
         "detections": detections,
         "events": len(events),

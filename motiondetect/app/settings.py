@@ -81,6 +81,7 @@ RUN_DEFAULTS: dict[str, object] = {
     "include": (),  # globs on paths relative to a scanned directory
     "exclude": (),
     "frames_fps": None,  # None: the video module's assumed rate, marked "assumed"
+    "frame_skip": 0,  # frames after each judged one that carry its result
     "min_event_frames": 3,
     "merge_gap_frames": 5,
     "pad_frames": 5,
@@ -107,6 +108,7 @@ RUN_CHECKS: dict[str, tuple] = {
     "video_size": (int, 64, 4096),
     "jobs": (int, 1, 64),
     "frames_fps": (float, 0.1, 1000.0),
+    "frame_skip": (int, 0, None),
     "min_event_frames": (int, 0, None),
     "merge_gap_frames": (int, 0, None),
     "pad_frames": (int, 0, None),
@@ -164,6 +166,7 @@ class Settings:
     include: tuple
     exclude: tuple
     frames_fps: float | None
+    frame_skip: int
     min_event_frames: int
     merge_gap_frames: int
     pad_frames: int
@@ -331,6 +334,10 @@ def make_settings(values: dict) -> Settings:
                 run[key] = parse_time(run[key], f"--{key.replace('_', '-')}")
             except ValueError as exc:
                 raise SettingsError(str(exc)) from None
+    if run["frame_skip"] and run["egomotion"] is not None:
+        raise SettingsError(
+            "--frame-skip cannot be combined with --egomotion (its motions are frame to frame)"
+        )
     start, end = run["start"], run["end"]
     if start and end and start.unit == end.unit and end.value <= start.value:
         raise SettingsError(f"--end ({end}) must come after --start ({start})")

@@ -45,7 +45,10 @@ class FrameResult:
     """Everything reported for one frame.
 
     ``mask`` (work pixels) is set on the velocity path; ``reason`` says why
-    a frame could not be judged (then nothing is flagged on it).
+    a frame could not be judged (then nothing is flagged on it);
+    ``held_from`` is set on a frame skipped by ``frame_skip``
+    (:meth:`MotionDetector.stream`): the index of the judged frame whose
+    result it carries.
     """
 
     index: int
@@ -59,6 +62,11 @@ class FrameResult:
     mask: np.ndarray | None = None
     camera: CameraFit | None = None
     reason: str = ""
+    held_from: int | None = None
+
+    def held(self, index: int, time_s: float) -> FrameResult:
+        """This result carried to a later, skipped frame."""
+        return dataclasses.replace(self, index=index, time_s=time_s, held_from=self.index)
 
     @property
     def moving_fraction(self) -> float:
@@ -84,6 +92,40 @@ class FrameResult:
         return cv2.resize(
             source.astype(np.uint8) * 255, (width, height), interpolation=cv2.INTER_NEAREST
         )
+
+
+def _judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:
+    """(the skipped frames before a frame to judge, that frame): every
+    ``every``-th frame is judged, from the first; the last group's frame is
+    None when the input ends on skipped frames."""
+    held: list[F] = []
+    for n, frame in enumerate(frames):
+        if n % every:
+            held.append(frame)
+        else:
+            yield held, frame
+            held = []
+    if held:
+        yield held, None
+
+
+def _measured_ahead(groups: Iterable[tuple], measure) -> Iterator[tuple]:
+    """``(held, frame, measure(frame.image))`` per group, each group read and
+    measured on a second thread while the one before is used."""
+    items = iter(groups)
+
+    def read_and_measure():
+        got = next(items, None)
+        if got is None:
+            return None
+        held, frame = got
+        return held, frame, (None if frame is None else measure(frame.image))
+
+    with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
+        pending = ahead.submit(read_and_measure)
+        while (got := pending.result()) is not None:
+            pending = ahead.submit(read_and_measure)
+            yield got
 
 
 def fuse(
@@ -194,30 +236,34 @@ class MotionDetector:
         """Run one frame through the measurement and the detectors."""
         return self.judge(self.measure_frame(frame), index, time_s)
 
-    def stream(self, frames: Iterable[F]) -> Iterator[tuple[F, FrameResult]]:
+    def stream(self, frames: Iterable[F], frame_skip: int = 0) -> Iterator[tuple[F, FrameResult]]:
         """Each frame (anything with ``image``, ``index`` and ``time_s``) with its result.
 
+        With ``frame_skip`` n, only every (n+1)-th frame is measured and
+        judged (velocities then span n+1 frames); each skipped frame comes
+        with the last judged frame's result, marked ``held_from`` (like
+        DVR-Scan's ``--frame-skip``: faster, coarser in time). The skipped
+        frames are held in memory until the next judged frame is measured.
+
         When OpenCV may use more than one thread (``cv2.getNumThreads()``),
-        the next frame is read and measured on a second thread while this
-        one is judged: the results are those of :meth:`process`, in order.
-        Reading ``frames`` then happens on that thread too.
+        the next frame to judge is read and measured on a second thread
+        while this one is judged: the results are those of :meth:`process`,
+        in order. Reading ``frames`` then happens on that thread too.
         """
+        if frame_skip < 0:
+            raise ValueError(f"frame_skip must be at least 0, but got {frame_skip}")
+        groups = _judged_groups(frames, frame_skip + 1)
         if cv2.getNumThreads() <= 1:
-            for frame in frames:
-                yield frame, self.process(frame.image, frame.index, frame.time_s)
-            return
-        items = iter(frames)
-
-        def read_and_measure():
-            frame = next(items, None)
-            return None if frame is None else (frame, self.measure_frame(frame.image))
-
-        with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
-            pending = ahead.submit(read_and_measure)
-            while (got := pending.result()) is not None:
-                pending = ahead.submit(read_and_measure)
-                frame, flow = got
-                yield frame, self.judge(flow, frame.index, frame.time_s)
+            measured = ((*g, self.measure_frame(g[1].image) if g[1] else None) for g in groups)
+        else:
+            measured = _measured_ahead(groups, self.measure_frame)
+        last = None
+        for held, frame, flow in measured:
+            for skipped in held:
+                yield skipped, last.held(skipped.index, skipped.time_s)
+            if frame is not None:
+                last = self.judge(flow, frame.index, frame.time_s)
+                yield frame, last
 
     def measure_frame(self, frame: np.ndarray) -> object | None:
         """The first half of :meth:`process`: the frame's measurement alone.

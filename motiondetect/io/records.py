@@ -34,6 +34,8 @@ def frame_record(result: FrameResult) -> dict:
     }
     if result.reason:
         record["reason"] = result.reason
+    if result.held_from is not None:
+        record["held_from"] = result.held_from
     return record
 
 
