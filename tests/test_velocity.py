@@ -436,9 +436,10 @@ def test_animate_skips_the_frame_edge_of_both_flow_fields():
     where each point came from) are extrapolated; the animate test skips twice
     the edge band there, which removes false alarms and no mover."""
     no_evidence = VelocityAnimateConfig(evidence_sigmas=0.0)  # as when this was measured
+    unchecked = DenseFlowConfig(check_preset="off")
     band, no_band = (FitConfig(edge_px=px, aperture_noise=0.0) for px in (4.0, 0.0))
-    with_band = _animate_on_sample("pan_blindspot", band, no_evidence)
-    without = _animate_on_sample("pan_blindspot", no_band, no_evidence)
+    with_band = _animate_on_sample("pan_blindspot", band, no_evidence, unchecked)
+    without = _animate_on_sample("pan_blindspot", no_band, no_evidence, unchecked)
     assert with_band[0] <= 0.8 and without[0] >= with_band[0] + 0.2  # measured 0.74 and 1.09
     assert with_band[1] == pytest.approx(without[1])
 
@@ -449,8 +450,9 @@ def test_animate_violations_need_an_image_change(name):
     is undone, did not change is the measurement's error: gating violations
     on an image change removes false alarms and keeps the movers."""
     whole = FitConfig(aperture_noise=0.0)  # as when this was measured
-    gated = _animate_on_sample(name, whole)
-    ungated = _animate_on_sample(name, whole, VelocityAnimateConfig(evidence_sigmas=0.0))
+    unchecked = DenseFlowConfig(check_preset="off")
+    gated = _animate_on_sample(name, whole, unchecked)
+    ungated = _animate_on_sample(name, whole, unchecked, VelocityAnimateConfig(evidence_sigmas=0.0))
     # measured 0.03 against 0.60 (pan_blindspot), 0.05 against 0.50
     assert gated[0] <= 0.2 and ungated[0] >= 0.4
     assert gated[1] == pytest.approx(ungated[1], abs=0.03)
@@ -525,13 +527,14 @@ def test_seeds_are_tested_on_the_motion_the_image_determines():
     """uniform_rigid's brick wall has long mortar lines: along them the flow is
     filled in, and wrong by pixels. Testing seeds only on the determined
     residual removes most of those false alarms and keeps uniform_mixed's
-    movers."""
-    whole = FitConfig(aperture_noise=0.0)
-    on = _animate_on_sample("uniform_rigid", detector="both")[0]
-    off = _animate_on_sample("uniform_rigid", whole, detector="both")[0]
+    movers. Measured without the forward-backward check, which came later and
+    takes out most of the rest (0.09 and 0.16 with it)."""
+    whole, unchecked = FitConfig(aperture_noise=0.0), DenseFlowConfig(check_preset="off")
+    on = _animate_on_sample("uniform_rigid", unchecked, detector="both")[0]
+    off = _animate_on_sample("uniform_rigid", whole, unchecked, detector="both")[0]
     assert on <= 0.7 and off >= 1.2  # measured 0.40 and 1.67
-    kept = _animate_on_sample("uniform_mixed", detector="both")
-    before = _animate_on_sample("uniform_mixed", whole, detector="both")
+    kept = _animate_on_sample("uniform_mixed", unchecked, detector="both")
+    before = _animate_on_sample("uniform_mixed", whole, unchecked, detector="both")
     assert kept[1] >= before[1] - 0.03 and kept[0] < before[0]  # measured 0.26 against 1.19
 
 
@@ -571,3 +574,67 @@ def test_frame_skip_judges_one_frame_in_three_and_holds_its_result(threads):
 def test_frame_skip_below_zero_is_refused():
     with pytest.raises(ValueError, match="frame_skip"):
         next(MotionDetector("both").stream([], frame_skip=-1))
+
+
+@pytest.mark.parametrize(
+    ("velocity", "forward", "confirmed"),
+    [
+        ((3.0, 1.0), (3.0, 1.0), True),  # the same motion both ways
+        ((0.0, 0.0), (0.7, 0.0), True),  # 0.49 <= 0.01 * 0.49 + 0.5
+        ((0.0, 0.0), (0.72, 0.0), False),  # 0.5184 > 0.01 * 0.5184 + 0.5
+        ((10.0, 0.0), (11.0, 0.0), True),  # 1 <= 0.01 * 221 + 0.5: the rule grows with speed
+        ((10.0, 0.0), (-10.0, 0.0), False),  # a wrong match, as on a periodic texture
+    ],
+)
+def test_forward_backward_check_is_the_published_rule(velocity, forward, confirmed):
+    from motiondetect.measurement.dense_flow import confirmed_both_ways, pixel_grid
+
+    h, w = 20, 30
+    v = np.tile(np.float32(velocity), (h, w, 1))
+    f = np.tile(np.float32(forward), (h, w, 1))
+    got = confirmed_both_ways(v, f, pixel_grid(w, h) - v)
+    assert got.shape == (h, w) and got.all() == confirmed and got.any() == confirmed
+
+
+def test_forward_backward_check_reads_the_forward_flow_where_each_pixel_was():
+    from motiondetect.measurement.dense_flow import confirmed_both_ways, pixel_grid
+
+    h, w = 40, 60
+    v = np.zeros((h, w, 2), np.float32)
+    v[:, 30:] = (5.0, 0.0)  # the right half came from 5 px to the left
+    f = np.zeros((h, w, 2), np.float32)
+    f[:, 25:50] = (5.0, 0.0)  # ... where the forward flow moves it 5 px right
+    got = confirmed_both_ways(v, f, pixel_grid(w, h) - v)
+    assert got[:, :25].all() and got[:, 30:55].all()  # both halves confirmed
+    assert not got[:, 25:30].any()  # still pixels whose source moved away
+    assert not got[:, 55:].any()  # moved pixels whose source did not move
+
+
+def test_an_error_while_judging_stops_the_reading_thread_before_it_propagates(monkeypatch):
+    """The caller closes its source when an error comes out of ``stream``; the
+    second thread must not be reading it then (PyAV crashed on a closed
+    container)."""
+    image = (np.indices((120, 160)).sum(axis=0) % 7 * 30).astype(np.uint8)
+    md = MotionDetector("both")
+    judge = md.judge
+
+    def fail_on_the_third(flow, index, time_s):
+        if index == 2:
+            raise RuntimeError("boom")
+        return judge(flow, index, time_s)
+
+    monkeypatch.setattr(md, "judge", fail_on_the_third)
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        frames = (SourceFrame(i, i / 30, np.roll(image, i, axis=1)) for i in range(8))
+        with pytest.raises(RuntimeError, match="boom") as caught:
+            for _ in md.stream(frames, frame_skip=0):
+                pass
+        # while the error (and its traceback, holding the stream's frame) lives,
+        # as when process_input's source closes during its propagation
+        readers = [t for t in threading.enumerate() if t.name.startswith("measure")]
+        assert caught.traceback
+    finally:
+        cv2.setNumThreads(before)
+    assert readers == []

@@ -234,13 +234,15 @@ class CameraFit:
         """``candidates`` narrowed to the pixels whose *determined* residual
         (:func:`~motiondetect.measurement.aperture.determined` over the
         field's patch) lies off the ray through ``epipole`` by more than
-        ``tolerance`` px/frame; (h, w) bool, a new array.
+        ``tolerance`` px/frame; (h, w) bool, a new array. A velocity the
+        flow measured the other way does not confirm (``field.confirmed``)
+        is DIS's error, not a residual, and is never beyond.
 
         Evaluated at the candidates only (the residual itself is the bound:
         the determined part is never longer), so a frame without
         candidates costs nothing.
         """
-        out = candidates.copy()
+        out = candidates.copy() if field.confirmed is None else candidates & field.confirmed
         if not out.any():
             return out
         ys, xs = np.nonzero(out)

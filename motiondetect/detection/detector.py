@@ -15,6 +15,7 @@ detectors chosen by name from the registry, and then:
 from __future__ import annotations
 
 import collections
+import contextlib
 import dataclasses
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -258,12 +259,15 @@ class MotionDetector:
         else:
             measured = _measured_ahead(groups, self.measure_frame)
         last = None
-        for held, frame, flow in measured:
-            for skipped in held:
-                yield skipped, last.held(skipped.index, skipped.time_s)
-            if frame is not None:
-                last = self.judge(flow, frame.index, frame.time_s)
-                yield frame, last
+        # Closed on any exit, so that the reading thread has stopped before an
+        # error here leaves the caller to close the source it reads.
+        with contextlib.closing(measured):
+            for held, frame, flow in measured:
+                for skipped in held:
+                    yield skipped, last.held(skipped.index, skipped.time_s)
+                if frame is not None:
+                    last = self.judge(flow, frame.index, frame.time_s)
+                    yield frame, last
 
     def measure_frame(self, frame: np.ndarray) -> object | None:
         """The first half of :meth:`process`: the frame's measurement alone.
