@@ -638,3 +638,23 @@ def test_an_error_while_judging_stops_the_reading_thread_before_it_propagates(mo
     finally:
         cv2.setNumThreads(before)
     assert readers == []
+
+
+def test_forward_backward_check_on_a_list_of_points_equals_the_whole_frame():
+    """Points are remapped in rows of at most 4096 (remap's maps hold under
+    2^15 columns): 120000 of them give what a whole-frame remap gives."""
+    from motiondetect.measurement.dense_flow import confirmed_both_ways, pixel_grid
+
+    h, w = 300, 400
+    rng = np.random.default_rng(3)
+    v = cv2.GaussianBlur(rng.normal(0, 4, (h, w, 2)).astype(np.float32), (0, 0), 5) * 6
+    f = v + cv2.GaussianBlur(rng.normal(0, 3, (h, w, 2)).astype(np.float32), (0, 0), 3) * 2
+    source = pixel_grid(w, h) - v
+    back = cv2.remap(f, source[..., 0], source[..., 1], cv2.INTER_LINEAR,
+                     borderMode=cv2.BORDER_REPLICATE)  # fmt: skip
+    gap2 = ((back - v) ** 2).sum(axis=-1)
+    expected = gap2 <= 0.01 * ((back**2).sum(axis=-1) + (v**2).sum(axis=-1)) + 0.5
+    assert 0.2 < expected.mean() < 0.8  # both answers are common
+    assert np.array_equal(confirmed_both_ways(v, f, source), expected)
+    ys, xs = np.nonzero(rng.random((h, w)) < 0.3)
+    assert np.array_equal(confirmed_both_ways(v[ys, xs], f, source[ys, xs]), expected[ys, xs])

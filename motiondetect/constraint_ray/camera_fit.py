@@ -235,17 +235,21 @@ class CameraFit:
         (:func:`~motiondetect.measurement.aperture.determined` over the
         field's patch) lies off the ray through ``epipole`` by more than
         ``tolerance`` px/frame; (h, w) bool, a new array. A velocity the
-        flow measured the other way does not confirm (``field.confirmed``)
+        flow measured the other way does not confirm (:meth:`VelocityField.confirmed_at`)
         is DIS's error, not a residual, and is never beyond.
 
         Evaluated at the candidates only (the residual itself is the bound:
         the determined part is never longer), so a frame without
         candidates costs nothing.
         """
-        out = candidates.copy() if field.confirmed is None else candidates & field.confirmed
+        out = candidates.copy()
         if not out.any():
             return out
         ys, xs = np.nonzero(out)
+        if field.forward_px is not None:
+            confirmed = field.confirmed_at(ys, xs)
+            out[ys[~confirmed], xs[~confirmed]] = False
+            ys, xs = ys[confirmed], xs[confirmed]
         residual = (self.residual_px if residual is None else residual)[ys, xs]
         if self.aperture_energy > 0:
             tensor = tuple(t[ys, xs] for t in field.structure)

@@ -26,6 +26,8 @@ from motiondetect.measurement import stages
 from motiondetect.measurement.aperture import structure_tensor
 from motiondetect.measurement.normal_flow import GridGeometry
 
+_REMAP_COLUMNS = 4096  # points per row when remapping a list of points
+
 PRESETS = {
     "ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
     "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
@@ -109,9 +111,10 @@ class VelocityField:
     patch_px : int
         Side of the patch each velocity is measured over, work px (DIS's
         patch at its finest pyramid level, scaled to the working size).
-    confirmed : (h, w) ndarray of bool, optional
-        Where the flow measured the other way confirms the velocity
-        (:func:`confirmed_both_ways`); None: not checked.
+    forward_px : (h, w, 2) ndarray of float32, optional
+        The flow measured the other way, from the previous frame to this
+        one, at previous-frame pixels, for :meth:`confirmed_at`; None: no
+        check.
     """
 
     velocity_px: np.ndarray
@@ -122,7 +125,7 @@ class VelocityField:
     camera: Any = None
     tracked: np.ndarray | None = None
     patch_px: int = 8
-    confirmed: np.ndarray | None = None
+    forward_px: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -143,6 +146,16 @@ class VelocityField:
         """(h, w, 2) float32: where each pixel was in the previous frame,
         ``pixel_grid - velocity_px`` (computed once, shared: do not modify)."""
         return self.pixel_grid - self.velocity_px
+
+    def confirmed_at(self, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+        """(N,) bool: whether the flow measured the other way confirms the
+        velocity at each pixel (:func:`confirmed_both_ways`); all True
+        without ``forward_px``."""
+        if self.forward_px is None:
+            return np.ones(len(ys), bool)
+        return confirmed_both_ways(
+            self.velocity_px[ys, xs], self.forward_px, self.source_px[ys, xs]
+        )
 
     @cached_property
     def structure(self) -> tuple[np.ndarray, ...]:
@@ -165,7 +178,7 @@ def vector_length(vectors: np.ndarray) -> np.ndarray:
 def confirmed_both_ways(
     velocity: np.ndarray, forward: np.ndarray, source: np.ndarray
 ) -> np.ndarray:
-    """Where the flow measured the other way confirms each velocity.
+    """Which velocities the flow measured the other way confirms.
 
     The forward-backward check of Sundaram, Brox and Keutzer (ECCV 2010):
     a velocity ``v`` at ``p`` is confirmed when the forward flow ``w`` at
@@ -176,24 +189,33 @@ def confirmed_both_ways(
 
     Parameters
     ----------
-    velocity : (h, w, 2) ndarray of float32
-        Work px/frame at current-frame pixels (:attr:`VelocityField.velocity_px`).
+    velocity : (..., 2) ndarray of float32
+        Work px/frame of the points tested (current-frame pixels).
     forward : (h, w, 2) ndarray of float32
         Flow from the previous frame to this one, at previous-frame pixels.
-    source : (h, w, 2) ndarray of float32
-        ``p - velocity``, where each pixel was (:attr:`VelocityField.source_px`).
+    source : (..., 2) ndarray of float32
+        ``p - velocity``, where each point was (:attr:`VelocityField.source_px`).
 
     Returns
     -------
-    (h, w) ndarray of bool
+    (...) ndarray of bool
     """
+    shape = velocity.shape[:-1]
+    velocity = velocity.reshape(-1, 2)
+    n = len(velocity)
+    cols = min(max(n, 1), _REMAP_COLUMNS)  # remap's map holds under 2^15 columns and rows
+    points = np.zeros((-(-n // cols) * cols, 2), np.float32)
+    points[:n] = source.reshape(-1, 2)
     back = cv2.remap(
-        forward, source[..., 0], source[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
-    )
-    gap = back - velocity
-    gap2 = (gap * gap).sum(axis=-1)
-    allowed = 0.01 * ((back * back).sum(axis=-1) + (velocity * velocity).sum(axis=-1)) + 0.5
-    return gap2 <= allowed
+        forward, points.reshape(-1, cols, 2), None, cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_REPLICATE,
+    ).reshape(-1, 2)[:n]  # fmt: skip
+    bx, by = back.T  # planes: NumPy sums over a last axis of 2 slowly
+    vx, vy = velocity.T
+    gx, gy = bx - vx, by - vy
+    gap2 = gx * gx + gy * gy
+    allowed = 0.01 * ((bx * bx + by * by) + (vx * vx + vy * vy)) + 0.5
+    return (gap2 <= allowed).reshape(shape)
 
 
 def pixel_grid(width: int, height: int) -> np.ndarray:
@@ -274,14 +296,8 @@ class DenseFlow:
             return None
         # Flow from the current frame back to the previous one, at current pixels.
         velocity = -self._dis.calc(grey, previous, None)
-        source = self._grid - velocity
-        confirmed = None
-        if self._check is not None:
-            forward = self._check.calc(previous, grey, None)
-            confirmed = confirmed_both_ways(velocity, forward, source)
-        field = VelocityField(
+        forward = None if self._check is None else self._check.calc(previous, grey, None)
+        return VelocityField(
             velocity, grey, previous, self._geometry, self._grid,
-            patch_px=self._patch_px, confirmed=confirmed,
+            patch_px=self._patch_px, forward_px=forward,
         )  # fmt: skip
-        field.__dict__["source_px"] = source  # the cached property, computed once
-        return field
