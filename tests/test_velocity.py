@@ -17,6 +17,7 @@ from skimage import data
 
 from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
+from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.plane import (
     fit_homography,
@@ -571,9 +572,13 @@ def test_frame_skip_judges_one_frame_in_three_and_holds_its_result(threads):
         assert frames[i].mask[y : y + h, x : x + w].any()
 
 
-def test_frame_skip_below_zero_is_refused():
+def test_frame_skip_below_zero_or_with_known_egomotion_is_refused():
     with pytest.raises(ValueError, match="frame_skip"):
         next(MotionDetector("both").stream([], frame_skip=-1))
+    folder = Path(__file__).resolve().parents[1] / "sample_videos" / "uniform_rigid"
+    known = MotionDetector("constraint-ray", egomotion=EgoMotion.load(folder / "scene.json"))
+    with pytest.raises(ValueError, match="known ego-motion"):
+        next(known.stream([], frame_skip=1))
 
 
 @pytest.mark.parametrize(

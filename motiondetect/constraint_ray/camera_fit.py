@@ -246,8 +246,8 @@ class CameraFit:
         if not out.any():
             return out
         ys, xs = np.nonzero(out)
-        if field.forward_px is not None:
-            confirmed = field.confirmed_at(ys, xs)
+        confirmed = field.confirmed_at(ys, xs)
+        if not confirmed.all():
             out[ys[~confirmed], xs[~confirmed]] = False
             ys, xs = ys[confirmed], xs[confirmed]
         residual = (self.residual_px if residual is None else residual)[ys, xs]

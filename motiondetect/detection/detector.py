@@ -110,17 +110,20 @@ def _judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F
         yield held, None
 
 
+def _measured(group: tuple, measure) -> tuple:
+    """``(held, frame, measure(frame.image))`` for one of :func:`_judged_groups`."""
+    held, frame = group
+    return held, frame, (None if frame is None else measure(frame.image))
+
+
 def _measured_ahead(groups: Iterable[tuple], measure) -> Iterator[tuple]:
-    """``(held, frame, measure(frame.image))`` per group, each group read and
-    measured on a second thread while the one before is used."""
+    """:func:`_measured` per group, each group read and measured on a second
+    thread while the one before is used."""
     items = iter(groups)
 
     def read_and_measure():
         got = next(items, None)
-        if got is None:
-            return None
-        held, frame = got
-        return held, frame, (None if frame is None else measure(frame.image))
+        return None if got is None else _measured(got, measure)
 
     with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
         pending = ahead.submit(read_and_measure)
@@ -206,6 +209,7 @@ class MotionDetector:
             track = dataclasses.replace(track, persistence=persistence)
         classes = registry()
         self.measure = measure
+        self.egomotion = egomotion
         self.persistence = track.persistence
         self.detectors = {
             name: classes[name](by_type.get(classes[name].config_type), egomotion)
@@ -245,6 +249,7 @@ class MotionDetector:
         with the last judged frame's result, marked ``held_from`` (like
         DVR-Scan's ``--frame-skip``: faster, coarser in time). The skipped
         frames are held in memory until the next judged frame is measured.
+        Known ego-motion, given frame to frame, refuses it.
 
         When OpenCV may use more than one thread (``cv2.getNumThreads()``),
         the next frame to judge is read and measured on a second thread
@@ -253,9 +258,11 @@ class MotionDetector:
         """
         if frame_skip < 0:
             raise ValueError(f"frame_skip must be at least 0, but got {frame_skip}")
+        if frame_skip and self.egomotion is not None:
+            raise ValueError("frame_skip cannot be used with known ego-motion (frame to frame)")
         groups = _judged_groups(frames, frame_skip + 1)
         if cv2.getNumThreads() <= 1:
-            measured = ((*g, self.measure_frame(g[1].image) if g[1] else None) for g in groups)
+            measured = (_measured(group, self.measure_frame) for group in groups)
         else:
             measured = _measured_ahead(groups, self.measure_frame)
         last = None
