@@ -1,4 +1,5 @@
-"""Object support over a longer baseline: slow movers' plain bodies (issue 13)."""
+"""Object support over a longer baseline (slow movers' plain bodies) and the
+remembered background (the ghost a mover leaves) (issue 13)."""
 
 from __future__ import annotations
 
@@ -8,9 +9,9 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.detection.change_history import ChangeHistory
+from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory
 from motiondetect.detection.detector import _slow_parts
-from motiondetect.detection.objects import TrackConfig
+from motiondetect.detection.objects import TrackConfig, trimmed
 from motiondetect.measurement.image_change import chained_difference, difference_noise
 
 
@@ -96,3 +97,66 @@ def test_only_slow_flagged_parts_take_the_longer_baseline():
     speed[25:35, 30:50] = 3.0
     slow = _slow_parts(flagged, speed, TrackConfig(support_frames=3, support_px=2))
     assert slow[5:15, 5:15].all() and not slow[25:35, 30:50].any() and not slow[~flagged].any()
+
+
+def ghost_clip(frames=13, pan=1.0, speed=6, side=40):
+    """A view panning ``pan`` px/frame; a textured square moving ``speed``
+    px/frame to the right, from x = 20, over it. Frames and the square's masks."""
+    world = texture((120, 240), 2.0, 200, seed=1) + 20
+    body = texture((120, 240), 1.0, 200, seed=3) + 10
+    images, masks = [], []
+    for t in range(frames):
+        image = shifted(world, pan * t, 0)
+        x = 20 + speed * t
+        image[40 : 40 + side, x : x + side] = body[40 : 40 + side, x : x + side]
+        mask = np.zeros(image.shape, bool)
+        mask[40 : 40 + side, x : x + side] = True
+        images.append(np.clip(image, 0, 255).astype(np.uint8))
+        masks.append(mask)
+    return images, masks
+
+
+def test_the_remembered_background_takes_out_the_ghost_a_mover_leaves():
+    images, masks = ghost_clip()
+    plane = plane_from_motion(1.0, 0)
+    memory = BackgroundMemory(0.25, 2)
+    fit = SimpleNamespace(reliable=True, homography=plane)
+    for t in range(1, len(images)):
+        field = SimpleNamespace(grey=images[t], previous_grey=images[t - 1], shape=images[t].shape)
+        differs = memory.differs(field, fit, 3.0, 3)
+        warped = cv2.warpPerspective(images[t - 1], plane, images[t].shape[::-1],
+                                     flags=cv2.WARP_INVERSE_MAP)  # fmt: skip
+        one = cv2.absdiff(images[t], warped)
+        changed = cv2.blur(one, (3, 3)) > 3.0 * difference_noise(one)
+        memory.learn(masks[t], changed)  # as if the detectors flagged the square
+    ghost = masks[-2] & ~masks[-1]  # seen before the square came: known
+    ghost[:, :-1] &= ghost[:, 1:]  # off the square's new edge by a pixel
+    square = cv2.erode(masks[-1].astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    path = np.logical_or.reduce(masks).astype(np.uint8)
+    still = cv2.dilate(path, np.ones((9, 9), np.uint8)) == 0  # never under the square
+    still[:, :16] = still[:, -4:] = False  # the reflected border (16): not the pan
+    left_behind = np.zeros_like(still)
+    left_behind[44:76, 40:70] = True  # under the square at the start; uncovered 4+ frames ago
+    assert changed[ghost].mean() > 0.8  # the one-frame change shows the ghost
+    assert differs[ghost].mean() < 0.2  # the memory does not
+    assert differs[square].mean() > 0.9
+    assert differs[still].mean() < 0.05
+    assert differs[left_behind].mean() < 0.05  # seen twice since: known
+    assert differs[:, 0].all()  # content that just entered the view is unknown
+    unknown = SimpleNamespace(reliable=False, homography=None)
+    assert memory.differs(field, unknown, 3.0, 3) is None  # an unknown plane: start afresh
+    assert memory.differs(field, fit, 3.0, 3) is None
+
+
+def test_an_object_is_trimmed_to_its_largest_kept_part_unless_that_cuts_too_much():
+    own = np.zeros((40, 60), np.uint8)
+    own[10:30, 10:50] = 1
+    kept = own.copy()
+    kept[10:30, 10:18] = 0  # its trailing ghost
+    kept[12, 5:9] = 1  # a speck of its own
+    out = trimmed(own, kept, None, 0.7)
+    assert out.sum() == 20 * 32 and not out[10:30, 10:18].any()
+    kept[10:30, 10:40] = 0  # would keep a quarter
+    assert (trimmed(own, kept, None, 0.7) == own).all()
+    with pytest.raises(ValueError, match="background_rate"):
+        TrackConfig(background_rate=1.5)

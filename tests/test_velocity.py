@@ -209,6 +209,24 @@ def test_constraint_ray_finds_a_whole_mover_under_a_pan():
     assert np.mean(hits) >= 0.9
 
 
+def test_the_remembered_background_trims_a_fast_movers_trail():
+    """8 px/frame under a pan: without the memory the mask carries the
+    ghost on the trailing side (measured precision 0.67); with it 0.76,
+    and the mover is still found whole (recall 1.00 both ways)."""
+    clip = _pan_with_mover(lambda t: (40 + 8 * t, 100 + 0.5 * t))
+    scores = {}
+    for rate in (0.0, 0.25):
+        md = MotionDetector("both", TrackConfig(background_rate=rate))
+        counts = Counts()
+        for t, (image, mask) in enumerate(clip):
+            result = md.process(image, t, t / 30)
+            if t >= 3:
+                counts.add(score_frame(result.input_mask(W, H), mask.astype(np.uint8) * 255))
+        scores[rate] = counts.metrics()
+    assert scores[0.25]["recall"] > 0.95 and scores[0.0]["recall"] > 0.95
+    assert scores[0.25]["precision"] > scores[0.0]["precision"] + 0.05
+
+
 def test_rigid_pan_flags_nothing():
     md = MotionDetector()
     for t in range(20):

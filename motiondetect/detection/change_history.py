@@ -59,3 +59,91 @@ class ChangeHistory:
             return None
         difference = chained_difference(self._greys[0], list(self._planes), self._greys[-1])
         return cv2.blur(difference, (box, box)) > sigmas * difference_noise(difference)
+
+
+class BackgroundMemory:
+    """The background last seen at each place, registered by the fitted planes.
+
+    One frame's change map shows a mover twice: where it is, and where it
+    was (the *ghost*: background uncovered since the previous frame). Dense
+    flow smears the mover's velocity over that ghost, so it is flagged too,
+    a trail on the mover's trailing side. A pixel whose image matches the
+    background remembered at that place is background, whatever the
+    previous frame showed there: the ghost is taken out, the mover stays.
+
+    The memory is a running mean of the frames, each warped into the next
+    by the frame's plane (like the frames of :class:`ChangeHistory`), that
+    learns only where the rigid world shows itself: pixels neither flagged
+    nor changed since the previous frame. A place counts as known after
+    ``frames`` such looks; a flagged place keeps what was seen there before
+    the mover came. Content that entered the view, and places never seen
+    unoccluded, are unknown and never match.
+
+    State: the memory and its per-pixel count of looks, cleared by an
+    unreliable frame (its plane is unknown) or a change of size.
+
+    Parameters
+    ----------
+    rate : float
+        Share of each new look blended into the memory, in (0, 1].
+    frames : int
+        Looks before a place's memory is trusted.
+    """
+
+    def __init__(self, rate: float, frames: int) -> None:
+        self.rate = rate
+        self.frames = frames
+        self.reset()
+
+    def reset(self) -> None:
+        self._memory: np.ndarray | None = None  # (h, w) float32 grey levels
+        self._looks: np.ndarray | None = None  # (h, w) uint8
+        self._grey: np.ndarray | None = None
+
+    def differs(self, field: VelocityField, fit: CameraFit, sigmas: float, box: int):
+        """Where this frame differs from the remembered background, or the
+        background is unknown, (h, w) bool; None when nothing is known yet.
+
+        The ``box``-px mean of ``|grey - memory|`` is compared with
+        ``sigmas`` robust sigmas of that difference over the known places.
+        Call once per frame, before :meth:`learn`.
+        """
+        if not fit.reliable or fit.homography is None:
+            self.reset()
+            return None
+        h, w = field.shape
+        self._grey = field.grey.astype(np.float32)
+        if self._memory is None or self._memory.shape != (h, w):
+            self._memory = self._grey.copy()
+            self._looks = np.zeros((h, w), np.uint8)
+            return None
+        inverse = cv2.WARP_INVERSE_MAP  # the plane maps this frame's pixels to the last
+        self._memory = cv2.warpPerspective(
+            self._memory, fit.homography, (w, h), flags=inverse | cv2.INTER_LINEAR
+        )
+        self._looks = cv2.warpPerspective(
+            self._looks, fit.homography, (w, h), flags=inverse | cv2.INTER_NEAREST
+        )  # 0 (unknown) where content entered the view
+        known = self._looks >= self.frames
+        if known.sum() < known.size // 10:
+            return None
+        difference = np.minimum(cv2.absdiff(self._memory, self._grey), 255).astype(np.uint8)
+        noise = difference_noise(difference[known])
+        return (cv2.blur(difference, (box, box)) > sigmas * noise) | ~known
+
+    def learn(self, flagged: np.ndarray, changed: np.ndarray | None) -> None:
+        """Blend this frame into the memory where the rigid world shows:
+        not within 2 px of a ``flagged`` pixel, nor ``changed``."""
+        if self._memory is None or self._grey is None:
+            return
+        hidden = cv2.dilate(flagged.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+        if changed is not None:
+            hidden |= changed
+        first = self._looks == 0
+        blended = cv2.addWeighted(self._memory, 1.0 - self.rate, self._grey, self.rate, 0.0)
+        blended[first] = self._grey[first]
+        self._memory = np.where(hidden, self._memory, blended)
+        self._looks = np.where(hidden, self._looks, np.minimum(self._looks, 254) + 1).astype(
+            np.uint8
+        )
+        self._grey = None

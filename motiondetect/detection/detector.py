@@ -29,7 +29,7 @@ from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_cam
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
-from motiondetect.detection.change_history import ChangeHistory
+from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, components, find_regions, regions_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
@@ -219,6 +219,8 @@ class MotionDetector:
         self.fit_config = by_type.get(FitConfig, FitConfig())
         self.tracker = Tracker(track)
         self._history = ChangeHistory(track.support_frames)
+        rate = track.background_rate
+        self._background = BackgroundMemory(rate, track.background_frames) if rate > 0 else None
         if measure == "velocity":
             self.pipeline = DenseFlow(by_type.get(DenseFlowConfig))
         else:
@@ -236,6 +238,8 @@ class MotionDetector:
         self._epipole, self._recent = None, []
         self._sharpness.clear()
         self._history.reset()
+        if self._background is not None:
+            self._background.reset()
 
     def process(self, frame: np.ndarray, index: int, time_s: float) -> FrameResult:
         """Run one frame through the measurement and the detectors."""
@@ -317,7 +321,8 @@ class MotionDetector:
             union |= out.mask
         self._history.update(flow, fit)
         track = self.tracker.config
-        objects = group_objects(union, flow.velocity_px, track, self._support(fit, union))
+        unlike = self._remembered(flow, fit, union)
+        objects = group_objects(union, flow.velocity_px, track, self._support(fit, union), unlike)
         covered = sum(float(o.mask.mean()) for o in objects)
         reason = camera.reason
         if not reason and covered > self.fit_config.max_flagged_share:
@@ -352,6 +357,17 @@ class MotionDetector:
             return changed
         longer = self._history.changed(track.support_sigmas, _CHANGE_BOX)
         return changed if longer is None else changed | (longer & slow)
+
+    def _remembered(self, flow: VelocityField, fit: CameraFit, flagged: np.ndarray):
+        """Where the frame differs from the remembered background (None: no
+        memory, or nothing known yet); the memory then learns this frame."""
+        if self._background is None:
+            return None
+        sigmas = self.tracker.config.support_sigmas
+        differs = self._background.differs(flow, fit, sigmas, _CHANGE_BOX)
+        changed = None if fit.plane_difference is None else fit.image_changed(sigmas, _CHANGE_BOX)
+        self._background.learn(flagged, changed)
+        return differs
 
     def _persistent(
         self, flagged: np.ndarray, regions: list[Region]

@@ -64,6 +64,22 @@ class TrackConfig:
         Each object's mask is closed with a square this wide, work px (0:
         not closed): the support gate takes out a mover's plain interior,
         where the image does not change, and the closing puts it back.
+    background_rate : float
+        Trails: each frame's share in a background remembered at each place
+        and registered by the planes (:class:`~.change_history.BackgroundMemory`;
+        0: off, the default). An object's pixels where the image matches
+        that memory are background the mover has just uncovered (the ghost
+        of the one-frame change), so its mask is trimmed to the rest, the
+        largest part, when that keeps at least ``trim_share`` of it. Off by
+        default: cell F1 rises on every data set, but DAVIS object recall
+        falls from 0.807 to 0.793 (docs/detectors.md).
+    background_frames : int
+        Looks at a place, neither flagged nor changed, before its
+        remembered background is trusted.
+    trim_share : float
+        Smallest share of an object's mask its trimmed mask may keep; an
+        object the memory would cut more is kept whole (a mover the memory
+        learned while it was missed, or a plane locked onto a mover).
     prior : bool
         Inside a confirmed track's predicted box, a constraint-ray seed needs
         only the growth threshold (``grow_ratio`` of the tolerance): a
@@ -81,6 +97,9 @@ class TrackConfig:
     support_px: int = 2
     support_frames: int = 3
     close_px: int = 18
+    background_rate: float = 0.0
+    background_frames: int = 2
+    trim_share: float = 0.7
     prior: bool = False
 
     def __post_init__(self) -> None:
@@ -96,8 +115,14 @@ class TrackConfig:
                 "support_px",
                 "support_frames",
                 "close_px",
+                "background_rate",
+                "background_frames",
+                "trim_share",
             ),
         )
+        for name in ("background_rate", "trim_share"):
+            if getattr(self, name) > 1:
+                raise ValueError(f"{name} must be at most 1, but got {getattr(self, name)}")
 
 
 @dataclass(frozen=True)
@@ -116,6 +141,7 @@ def group_objects(
     velocity: np.ndarray,
     config: TrackConfig,
     changed: np.ndarray | None = None,
+    background: np.ndarray | None = None,
 ) -> list[MovingObject]:
     """Group flagged pixels into objects.
 
@@ -128,16 +154,17 @@ def group_objects(
     changed : (h, w) ndarray of bool, optional
         Where the image changed once the camera's motion is undone; flagged
         pixels farther than ``support_px`` from it are dropped.
+    background : (h, w) ndarray of bool, optional
+        Where the image differs from the remembered background (or it is
+        unknown); each object is trimmed to its largest part within
+        ``support_px`` of both this and ``changed`` (:func:`trimmed`).
 
     Returns
     -------
     list of MovingObject, largest first, with holes filled.
     """
     h, w = flagged.shape
-    mask = flagged.astype(np.uint8)
-    if changed is not None:
-        k = 2 * config.support_px + 1
-        mask &= cv2.dilate(changed.astype(np.uint8), np.ones((k, k), np.uint8))
+    mask, kept = _gated(flagged, config, changed, background)
     joined, kernel = mask, None
     if config.gap_px > 0:
         k = 2 * (config.gap_px // 2) + 1
@@ -159,10 +186,7 @@ def group_objects(
         own = (labels[y0:y1, x0:x1] == label).astype(np.uint8) & mask[y0:y1, x0:x1]
         if own.sum() < min_area:
             continue
-        if close is not None:
-            own = cv2.morphologyEx(own, cv2.MORPH_CLOSE, close)
-        contours, _ = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        cv2.drawContours(own, contours, -1, 1, thickness=cv2.FILLED)
+        own = _shaped(own, None if kept is None else kept[y0:y1, x0:x1], close, config)
         bx, by, bw, bh = cv2.boundingRect(own)
         filled = np.zeros((h, w), bool)
         filled[y0:y1, x0:x1] = own > 0
@@ -171,6 +195,73 @@ def group_objects(
         objects.append(MovingObject(filled, box, (float(v[0]), float(v[1]))))
     objects.sort(key=lambda o: -(o.box[2] - o.box[0]) * (o.box[3] - o.box[1]))
     return objects
+
+
+def _gated(
+    flagged: np.ndarray,
+    config: TrackConfig,
+    changed: np.ndarray | None,
+    background: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """The flagged pixels within ``support_px`` of ``changed``, and those also
+    within it of where the image differs from the remembered ``background``
+    (None without one), (h, w) uint8 0/1 each."""
+    mask = flagged.astype(np.uint8)
+    if changed is None:
+        return mask, None
+    reach = np.ones((2 * config.support_px + 1,) * 2, np.uint8)
+    mask &= cv2.dilate(changed.astype(np.uint8), reach)
+    if background is None:
+        return mask, None
+    return mask, mask & cv2.dilate((background & changed).astype(np.uint8), reach)
+
+
+def _shaped(
+    own: np.ndarray, kept: np.ndarray | None, close: np.ndarray | None, config: TrackConfig
+) -> np.ndarray:
+    """An object's mask trimmed (with ``kept``), closed and its holes filled,
+    (h, w) uint8 0/1."""
+    if kept is not None:
+        own = trimmed(own, kept, close, config.trim_share)
+    if close is not None:
+        own = cv2.morphologyEx(own, cv2.MORPH_CLOSE, close)
+    contours, _ = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(own, contours, -1, 1, thickness=cv2.FILLED)
+    return own
+
+
+def trimmed(
+    own: np.ndarray, kept: np.ndarray, close: np.ndarray | None, share: float
+) -> np.ndarray:
+    """An object's mask without the background it has just uncovered.
+
+    Parameters
+    ----------
+    own : (h, w) ndarray of uint8, 0/1
+        The object's flagged pixels.
+    kept : (h, w) ndarray of uint8, 0/1
+        Pixels that differ from the remembered background as well as from
+        the previous frame.
+    close : (k, k) ndarray of uint8 or None
+        The object's closing kernel, applied to the kept part first.
+    share : float
+        The trimmed mask must keep at least this share of ``own``.
+
+    Returns
+    -------
+    (h, w) ndarray of uint8, 0/1
+        The largest connected part of ``own & kept`` (closed), or ``own``
+        when that part is smaller than ``share`` of it.
+    """
+    cut = own & kept
+    if close is not None:
+        cut = cv2.morphologyEx(cut, cv2.MORPH_CLOSE, close)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(cut, connectivity=8)
+    if count < 2:
+        return own
+    largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    cut = (labels == largest).astype(np.uint8)
+    return cut if cut.sum() >= share * own.sum() else own
 
 
 def box_iou(a: tuple, b: tuple) -> float:
