@@ -102,7 +102,8 @@ class BackgroundMemory:
 
     def differs(self, field: VelocityField, fit: CameraFit, sigmas: float, box: int):
         """Where this frame differs from the remembered background, or the
-        background is unknown, (h, w) bool; None when nothing is known yet.
+        background is unknown, (h, w) bool; None while under a tenth of the
+        frame is known (too little to measure the difference's noise on).
 
         The ``box``-px mean of ``|grey - memory|`` is compared with
         ``sigmas`` robust sigmas of that difference over the known places.
@@ -142,8 +143,7 @@ class BackgroundMemory:
         first = self._looks == 0
         blended = cv2.addWeighted(self._memory, 1.0 - self.rate, self._grey, self.rate, 0.0)
         blended[first] = self._grey[first]
-        self._memory = np.where(hidden, self._memory, blended)
-        self._looks = np.where(hidden, self._looks, np.minimum(self._looks, 254) + 1).astype(
-            np.uint8
-        )
+        shown = ~hidden
+        self._memory[shown] = blended[shown]  # the warped memory is ours to change
+        self._looks[shown] = np.minimum(self._looks[shown], 254) + 1
         self._grey = None
