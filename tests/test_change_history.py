@@ -9,8 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory
-from motiondetect.detection.detector import _slow_parts
+from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.objects import TrackConfig, trimmed
 from motiondetect.measurement.image_change import chained_difference, difference_noise
 
@@ -95,7 +94,7 @@ def test_only_slow_flagged_parts_take_the_longer_baseline():
     speed = np.zeros((40, 60), np.float32)
     speed[5:15, 5:15] = 0.4
     speed[25:35, 30:50] = 3.0
-    slow = _slow_parts(flagged, speed, TrackConfig(support_frames=3, support_px=2))
+    slow = slow_parts(flagged, speed, frames=3, px=2)
     assert slow[5:15, 5:15].all() and not slow[25:35, 30:50].any() and not slow[~flagged].any()
 
 

@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
+from motiondetect.detection.regions import components
 from motiondetect.measurement.dense_flow import VelocityField
 from motiondetect.measurement.image_change import chained_difference, difference_noise
 
@@ -59,6 +60,21 @@ class ChangeHistory:
             return None
         difference = chained_difference(self._greys[0], list(self._planes), self._greys[-1])
         return cv2.blur(difference, (box, box)) > sigmas * difference_noise(difference)
+
+
+def slow_parts(flagged: np.ndarray, speed: np.ndarray, frames: int, px: float) -> np.ndarray:
+    """The flagged components whose mean residual ``speed`` (work px/frame)
+    carries them no farther than ``px`` over ``frames - 1`` frames, (h, w)
+    bool: there the change over ``frames`` frames adds a slow mover's plain
+    body; a faster mover would add the trail it left."""
+    count, labels = components(flagged)
+    inside = labels[flagged]
+    sums = np.bincount(inside, weights=speed[flagged], minlength=count)
+    sizes = np.bincount(inside, minlength=count)
+    mean = sums / np.maximum(sizes, 1)
+    slow = mean * (frames - 1) <= px
+    slow[0] = False
+    return slow.take(labels)
 
 
 class BackgroundMemory:

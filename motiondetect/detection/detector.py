@@ -29,9 +29,9 @@ from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_cam
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
-from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory
+from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
-from motiondetect.detection.regions import Region, components, find_regions, regions_mask
+from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.stages import GRID
@@ -352,21 +352,23 @@ class MotionDetector:
         changed = fit.image_changed(track.support_sigmas, _CHANGE_BOX)
         if track.support_frames < 2 or fit.residual_px is None or not flagged.any():
             return changed
-        slow = _slow_parts(flagged, fit.residual_length(), track)
+        slow = slow_parts(flagged, fit.residual_length(), track.support_frames, track.support_px)
         if not slow.any():
             return changed
         longer = self._history.changed(track.support_sigmas, _CHANGE_BOX)
         return changed if longer is None else changed | (longer & slow)
 
     def _remembered(self, flow: VelocityField, fit: CameraFit, flagged: np.ndarray):
-        """Where the frame differs from the remembered background (None: no
-        memory, or nothing known yet); the memory then learns this frame."""
+        """Where the frame differs from the remembered background (None: no memory,
+        or nothing known yet); it then learns this frame outside the flagged
+        pixels and the boxes where confirmed tracks are predicted."""
         if self._background is None:
             return None
         sigmas = self.tracker.config.support_sigmas
         differs = self._background.differs(flow, fit, sigmas, _CHANGE_BOX)
         changed = None if fit.plane_difference is None else fit.image_changed(sigmas, _CHANGE_BOX)
-        self._background.learn(flagged, changed)
+        tracked = self.tracker.predicted_mask(flow.shape)  # a mover missed this frame
+        self._background.learn(flagged if tracked is None else flagged | tracked, changed)
         return differs
 
     def _persistent(
@@ -382,18 +384,3 @@ class MotionDetector:
         grown = [cv2.dilate(r.astype(np.uint8), _GROW) > 0 for r in recent]
         kept = [r for r in regions if all(g[r.cells[:, 0], r.cells[:, 1]].any() for g in grown)]
         return (regions_mask(kept) if kept else np.zeros_like(flagged)), kept
-
-
-def _slow_parts(flagged: np.ndarray, speed: np.ndarray, track: TrackConfig) -> np.ndarray:
-    """The flagged components whose mean residual speed (work px/frame) carries
-    them no farther than ``support_px`` over ``support_frames - 1`` frames,
-    (h, w) bool: there the longer-baseline change adds a slow mover's plain
-    body; a faster mover would add the trail it left."""
-    count, labels = components(flagged)
-    inside = labels[flagged]
-    sums = np.bincount(inside, weights=speed[flagged], minlength=count)
-    sizes = np.bincount(inside, minlength=count)
-    mean = sums / np.maximum(sizes, 1)
-    slow = mean * (track.support_frames - 1) <= track.support_px
-    slow[0] = False
-    return slow.take(labels)
