@@ -145,7 +145,7 @@ class BackgroundMemory:
         if known.sum() < known.size // 10:
             return None
         difference = np.minimum(cv2.absdiff(self._memory, self._grey), 255).astype(np.uint8)
-        noise = difference_noise(difference[known])
+        noise = difference_noise(difference, known)
         return (cv2.blur(difference, (box, box)) > sigmas * noise) | ~known
 
     def learn(self, flagged: np.ndarray, changed: np.ndarray | None) -> None:
@@ -153,13 +153,15 @@ class BackgroundMemory:
         not within 2 px of a ``flagged`` pixel, nor ``changed``."""
         if self._memory is None or self._grey is None:
             return
-        hidden = cv2.dilate(flagged.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+        hidden = cv2.dilate(flagged.view(np.uint8), np.ones((5, 5), np.uint8))
         if changed is not None:
-            hidden |= changed
-        first = self._looks == 0
-        blended = cv2.addWeighted(self._memory, 1.0 - self.rate, self._grey, self.rate, 0.0)
-        blended[first] = self._grey[first]
-        shown = ~hidden
-        self._memory[shown] = blended[shown]  # the warped memory is ours to change
-        self._looks[shown] = np.minimum(self._looks[shown], 254) + 1
+            hidden |= changed.view(np.uint8)
+        shown = (hidden == 0).view(np.uint8)
+        if self.rate < 1.0:  # the looks averaged; a place's first look taken as it is
+            blended = cv2.addWeighted(self._memory, 1.0 - self.rate, self._grey, self.rate, 0.0)
+            np.copyto(blended, self._grey, where=self._looks == 0)
+        else:
+            blended = self._grey
+        cv2.copyTo(blended, shown, self._memory)  # the warped memory is ours to change
+        cv2.add(self._looks, 1, self._looks, shown)  # saturates at 255
         self._grey = None

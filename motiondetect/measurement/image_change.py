@@ -50,12 +50,15 @@ def chained_difference(
     return cv2.absdiff(warped, grey)
 
 
-def difference_noise(difference: np.ndarray) -> float:
+def difference_noise(difference: np.ndarray, where: np.ndarray | None = None) -> float:
     """Robust sigma of a (h, w) uint8 difference image plus one grey level of
     quantisation, grey levels: most of a frame is explained by the plane, so
-    the median difference is its noise (found by histogram)."""
-    counts = np.bincount(difference.ravel(), minlength=256)
-    median = int(np.searchsorted(np.cumsum(counts), difference.size / 2))
+    the median difference is its noise (found by histogram). ``where``, a
+    (h, w) bool mask, limits it to those pixels."""
+    mask = None if where is None else where.view(np.uint8)
+    counts = cv2.calcHist([difference], [0], mask, [256], [0, 256]).ravel()
+    size = difference.size if where is None else int(counts.sum())
+    median = int(np.searchsorted(np.cumsum(counts), size / 2))
     return median * _ABS_MEDIAN_TO_SIGMA + 1.0
 
 
