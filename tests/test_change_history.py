@@ -115,10 +115,11 @@ def ghost_clip(frames=13, pan=1.0, speed=6, side=40):
     return images, masks
 
 
-def test_the_remembered_background_takes_out_the_ghost_a_mover_leaves():
+@pytest.mark.parametrize("rate", [0.25, 1.0])  # a running mean; the last look (the default)
+def test_the_remembered_background_takes_out_the_ghost_a_mover_leaves(rate):
     images, masks = ghost_clip()
     plane = plane_from_motion(1.0, 0)
-    memory = BackgroundMemory(0.25, 2)
+    memory = BackgroundMemory(rate, 2)
     fit = SimpleNamespace(reliable=True, homography=plane)
     for t in range(1, len(images)):
         field = SimpleNamespace(grey=images[t], previous_grey=images[t - 1], shape=images[t].shape)

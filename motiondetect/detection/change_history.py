@@ -87,10 +87,11 @@ class BackgroundMemory:
     background remembered at that place is background, whatever the
     previous frame showed there: the ghost is taken out, the mover stays.
 
-    The memory is a running mean of the frames, each warped into the next
-    by the frame's plane (like the frames of :class:`ChangeHistory`), that
-    learns only where the rigid world shows itself: pixels neither flagged
-    nor changed since the previous frame. A place counts as known after
+    The memory, warped into each new frame by that frame's plane (like the
+    frames of :class:`ChangeHistory`), learns only where the rigid world
+    shows itself: pixels neither flagged nor changed since the previous
+    frame. At ``rate`` 1 it holds the last such look at each place; below
+    1, a running mean of the looks. A place counts as known after
     ``frames`` such looks; a flagged place keeps what was seen there before
     the mover came. Content that entered the view, and places never seen
     unoccluded, are unknown and never match.
