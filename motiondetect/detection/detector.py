@@ -30,6 +30,7 @@ from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
+from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
@@ -323,6 +324,7 @@ class MotionDetector:
         track = self.tracker.config
         unlike = self._remembered(flow, fit, union)
         objects = group_objects(union, flow.velocity_px, track, self._support(fit, union), unlike)
+        objects = assigned_objects(objects, flow, fit, track.layer_sigmas, track.min_area_share)
         covered = sum(float(o.mask.mean()) for o in objects)
         reason = camera.reason
         if not reason and covered > self.fit_config.max_flagged_share:

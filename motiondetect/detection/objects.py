@@ -81,6 +81,13 @@ class TrackConfig:
         Smallest share of an object's mask its trimmed mask may keep; an
         object the memory would cut more is kept whole (a mover the memory
         learned while it was missed, or a plane locked onto a mover).
+    layer_sigmas : float
+        Each object keeps only the pixels its own velocity predicts no worse
+        than the plane does, within this many robust sigmas of the frame's
+        plane difference (:mod:`.layers`; 0: off): the background that dense
+        flow and the closing add around a mover. Only a cut that leaves one
+        part of at least ``min_area_share`` of the frame, and at least half
+        the object, is taken.
     prior : bool
         Inside a confirmed track's predicted box, a constraint-ray seed needs
         only the growth threshold (``grow_ratio`` of the tolerance): a
@@ -101,6 +108,7 @@ class TrackConfig:
     background_rate: float = 1.0
     background_frames: int = 2
     trim_share: float = 0.7
+    layer_sigmas: float = 3.0
     prior: bool = False
 
     def __post_init__(self) -> None:
@@ -119,6 +127,7 @@ class TrackConfig:
                 "background_rate",
                 "background_frames",
                 "trim_share",
+                "layer_sigmas",
             ),
         )
         for name in ("background_rate", "trim_share"):
