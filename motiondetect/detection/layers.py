@@ -21,13 +21,18 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
-from motiondetect.detection.objects import MovingObject
+from motiondetect.detection.objects import MovingObject, filled
 from motiondetect.measurement.dense_flow import VelocityField
 from motiondetect.measurement.image_change import difference_noise
 
 #: Side of the window the two prediction errors are averaged over, work px
 #: (about the flow's patch at the working size, like ``evidence_box``).
 ERROR_BOX = 5
+
+#: Smallest share of an object a cut may keep: a cut that would take more
+#: means the object's own velocity describes it poorly (a turning or
+#: deforming mover), not that the plane's layer reaches into it.
+MIN_KEPT = 0.5
 
 
 def plane_predicts_better(
@@ -77,10 +82,9 @@ def assigned(
 
     Only a clean cut is taken: what remains must be one part of at least
     ``min_area`` work px (parts smaller than that are crumbs and go too), and
-    at least half the object. A cut that leaves several such parts (two
-    movers grouped as one, a limb joined by a smeared band) or that would
-    take most of the object (its own velocity describes it poorly, as for a
-    turning or deforming mover) leaves the object as it was.
+    at least ``MIN_KEPT`` of the object. A cut that leaves several such
+    parts (two movers grouped as one, a limb joined by a smeared band) or
+    that would take more leaves the object as it was.
     """
     x0, y0, x1, y1 = obj.box
     if x1 - x0 < ERROR_BOX or y1 - y0 < ERROR_BOX:
@@ -90,14 +94,12 @@ def assigned(
     if not background.any():
         return obj
     kept = (own & ~background).view(np.uint8)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(kept, connectivity=8)
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(kept, connectivity=8)
     parts = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area) + 1
     if len(parts) != 1:
         return obj
-    kept = (labels == parts[0]).astype(np.uint8)
-    contours, _ = cv2.findContours(kept, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    cv2.drawContours(kept, contours, -1, 1, thickness=cv2.FILLED)
-    if kept.sum() < 0.5 * own.sum():
+    kept = filled((labels == parts[0]).astype(np.uint8))
+    if kept.sum() < MIN_KEPT * own.sum():
         return obj
     bx, by, bw, bh = cv2.boundingRect(kept)
     mask = np.zeros_like(obj.mask)

@@ -235,9 +235,14 @@ def _shaped(
         own = trimmed(own, kept, close, config.trim_share)
     if close is not None:
         own = cv2.morphologyEx(own, cv2.MORPH_CLOSE, close)
-    contours, _ = cv2.findContours(own, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    cv2.drawContours(own, contours, -1, 1, thickness=cv2.FILLED)
-    return own
+    return filled(own)
+
+
+def filled(mask: np.ndarray) -> np.ndarray:
+    """A (h, w) uint8 0/1 mask with the holes of its parts filled, in place."""
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(mask, contours, -1, 1, thickness=cv2.FILLED)
+    return mask
 
 
 def trimmed(
