@@ -214,16 +214,23 @@ class CameraFit:
     aperture_energy: float = 0.0
     _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
+    def difference_sigma(self) -> float:
+        """``change_noise``, measured on ``plane_difference`` when not given,
+        grey levels."""
+        if self.change_noise is not None:
+            return self.change_noise
+        if "noise" not in self._memo:
+            self._memo["noise"] = difference_noise(self.plane_difference)
+        return self._memo["noise"]
+
     def image_changed(self, sigmas: float, box: int) -> np.ndarray:
         """Where the image changed beyond noise once the camera's motion is
         undone: the ``box``-px mean of ``plane_difference`` above ``sigmas``
-        times ``change_noise``, (h, w) bool. Do not modify the result: it is
-        shared."""
+        times :meth:`difference_sigma`, (h, w) bool. Do not modify the
+        result: it is shared."""
         key = ("changed", sigmas, box)
         if key not in self._memo:
-            noise = self.change_noise
-            if noise is None:
-                noise = difference_noise(self.plane_difference)
+            noise = self.difference_sigma()
             self._memo[key] = cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
         return self._memo[key]
 

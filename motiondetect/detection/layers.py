@@ -23,7 +23,6 @@ import numpy as np
 from motiondetect.constraint_ray.camera_fit import CameraFit
 from motiondetect.detection.objects import MovingObject, filled
 from motiondetect.measurement.dense_flow import VelocityField
-from motiondetect.measurement.image_change import difference_noise
 
 #: Side of the window the two prediction errors are averaged over, work px
 #: (about the flow's patch at the working size, like ``evidence_box``).
@@ -118,8 +117,6 @@ def assigned_objects(
     no plane difference."""
     if sigmas <= 0 or fit.plane_difference is None or not objects:
         return objects
-    noise = fit.change_noise
-    if noise is None:
-        noise = difference_noise(fit.plane_difference)
+    margin = sigmas * fit.difference_sigma()
     min_area = min_area_share * fit.plane_difference.size
-    return [assigned(o, field, fit.plane_difference, sigmas * noise, min_area) for o in objects]
+    return [assigned(o, field, fit.plane_difference, margin, min_area) for o in objects]
