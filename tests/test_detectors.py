@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from motiondetect.detection.base import DETECTOR_SETS, Detector, DetectorOutput, registry
-from motiondetect.detection.detector import MotionDetector
+from motiondetect.detection.detector import FrameResult, MotionDetector
 from motiondetect.io.video import open_source
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "uniform_mixed"
@@ -48,3 +48,14 @@ def test_detector_satisfies_the_protocol_and_runs(name):
 def test_registry_names_match_the_detector_sets():
     named = {n for sets in DETECTOR_SETS.values() for names in sets.values() for n in names}
     assert named == set(registry())
+
+
+def test_input_mask_keeps_the_work_mask_centred():
+    """Scaling a work mask to the input maps pixel centres to pixel centres
+    (no half-pixel shift at a non-integer scale)."""
+    mask = np.zeros((9, 16), bool)
+    mask[3:6, 5:9] = True  # centre (6.5, 4) in work pixels
+    result = FrameResult(0, 0.0, [], np.zeros((64, 64), bool), None, None, None, mask=mask)
+    ys, xs = np.nonzero(result.input_mask(43, 24))
+    assert abs(xs.mean() - ((6.5 + 0.5) * 43 / 16 - 0.5)) < 0.5
+    assert abs(ys.mean() - ((4 + 0.5) * 24 / 9 - 0.5)) < 0.5

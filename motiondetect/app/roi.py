@@ -69,6 +69,6 @@ def keep_detections(result: FrameResult, roi: np.ndarray | None, min_area: int) 
     if mask is not None:
         h, w = mask.shape
         mask = mask & (
-            cv2.resize(flagged.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST) > 0
+            cv2.resize(flagged.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST_EXACT) > 0
         )
     return dataclasses.replace(result, regions=kept, flagged=flagged, mask=mask)

@@ -92,7 +92,7 @@ class FrameResult:
         """Flagged pixels at input size, (height, width) uint8 0/255."""
         source = self.mask if self.mask is not None else self.flagged
         return cv2.resize(
-            source.astype(np.uint8) * 255, (width, height), interpolation=cv2.INTER_NEAREST
+            source.astype(np.uint8) * 255, (width, height), interpolation=cv2.INTER_NEAREST_EXACT
         )
 
 

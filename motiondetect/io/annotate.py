@@ -30,7 +30,7 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
     sx, sy = size[0] / w0, size[1] / h0
     source = result.mask if result.mask is not None else result.flagged
     if source.any():
-        overlay = cv2.resize(source.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST)
+        overlay = cv2.resize(source.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST_EXACT)
         tint = out.copy()
         tint[overlay > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)

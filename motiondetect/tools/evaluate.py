@@ -156,7 +156,7 @@ def score_frame(
 ) -> Counts:
     """Tally one frame. ``pred`` > 127 is flagged; see the module doc for ``gt``."""
     if pred.shape != gt.shape:
-        pred = cv2.resize(pred, (gt.shape[1], gt.shape[0]), interpolation=cv2.INTER_NEAREST)
+        pred = cv2.resize(pred, (gt.shape[1], gt.shape[0]), interpolation=cv2.INTER_NEAREST_EXACT)
     flagged = pred > 127
     ignore = np.isin(gt, UNKNOWN_VALUES)
     positive = (gt >= 128) & ~ignore
