@@ -128,7 +128,9 @@ CELL_NEGATIVE = 0.05  # ... background when at most this share is mover or unkno
 CELL_FLAGGED = 0.3  # ... flagged when at least this share of it is flagged
 
 
-def _cell_shares(mask: np.ndarray) -> np.ndarray:
+def cell_shares(mask: np.ndarray) -> np.ndarray:
+    """Share of each whole ``CELL_PX`` x ``CELL_PX`` cell that ``mask`` covers,
+    (h // CELL_PX, w // CELL_PX) float32 (partial cells at the edges dropped)."""
     h, w = mask.shape
     rows, cols = h // CELL_PX, w // CELL_PX
     cropped = mask[: rows * CELL_PX, : cols * CELL_PX].astype(np.float32)
@@ -142,9 +144,9 @@ def cell_counts(flagged: np.ndarray, positive: np.ndarray, mover_or_unknown: np.
     <= 5 % are mover or unknown, and unscored in between; it is flagged when
     >= 30 % of its pixels are flagged.
     """
-    pos = _cell_shares(positive) >= CELL_POSITIVE
-    neg = _cell_shares(mover_or_unknown) <= CELL_NEGATIVE
-    hit = _cell_shares(flagged) >= CELL_FLAGGED
+    pos = cell_shares(positive) >= CELL_POSITIVE
+    neg = cell_shares(mover_or_unknown) <= CELL_NEGATIVE
+    hit = cell_shares(flagged) >= CELL_FLAGGED
     return int((pos & hit).sum()), int((neg & hit).sum()), int((pos & ~hit).sum())
 
 
