@@ -22,13 +22,7 @@ import numpy as np
 
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.io.video import open_source, read_mask
-from motiondetect.tools.evaluate import (
-    CELL_FLAGGED,
-    CELL_NEGATIVE,
-    CELL_POSITIVE,
-    UNKNOWN_VALUES,
-    cell_shares,
-)
+from motiondetect.tools.evaluate import cell_classes, cell_shares, truth_masks
 
 
 def tally(job: tuple) -> tuple[str, np.ndarray]:
@@ -44,13 +38,10 @@ def tally(job: tuple) -> tuple[str, np.ndarray]:
             result = detector.process(frame.image, frame.index, frame.time_s)
             if frame.index < compare.WARMUP or frame.index not in masks:
                 continue
-            truth = read_mask(masks[frame.index])
-            h, w = truth.shape
-            unknown = np.isin(truth, UNKNOWN_VALUES)
-            mover = (truth >= 128) & ~unknown
-            flagged = cell_shares(result.input_mask(w, h) > 0) >= CELL_FLAGGED
-            positive = cell_shares(mover) >= CELL_POSITIVE
-            negative = cell_shares(mover | unknown) <= CELL_NEGATIVE
+            mover, unknown = truth_masks(read_mask(masks[frame.index]))
+            h, w = mover.shape
+            flagged = result.input_mask(w, h) > 0
+            positive, negative, flagged = cell_classes(flagged, mover, mover | unknown)
             touched = (cell_shares(mover) > 0).astype(np.uint8)
             near = cv2.dilate(touched, kernel) > 0
             false = flagged & negative

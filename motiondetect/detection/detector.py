@@ -72,9 +72,13 @@ class FrameResult:
 
     @property
     def moving_fraction(self) -> float:
-        if self.mask is not None:
-            return float(self.mask.mean())
-        return float(self.flagged.mean())
+        return float(self.flagged_pixels.mean())
+
+    @property
+    def flagged_pixels(self) -> np.ndarray:
+        """What is flagged, (h, w) bool: ``mask`` in work pixels on the
+        velocity path, else the (64, 64) ``flagged`` grid."""
+        return self.mask if self.mask is not None else self.flagged
 
     @property
     def score(self) -> float:
@@ -90,10 +94,8 @@ class FrameResult:
 
     def input_mask(self, width: int, height: int) -> np.ndarray:
         """Flagged pixels at input size, (height, width) uint8 0/255."""
-        source = self.mask if self.mask is not None else self.flagged
-        return cv2.resize(
-            source.astype(np.uint8) * 255, (width, height), interpolation=cv2.INTER_NEAREST_EXACT
-        )
+        flagged = self.flagged_pixels.astype(np.uint8) * 255
+        return cv2.resize(flagged, (width, height), interpolation=cv2.INTER_NEAREST_EXACT)
 
 
 def _judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:

@@ -28,9 +28,8 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         cv2.resize(image, size, interpolation=cv2.INTER_AREA) if (w0, h0) != size else image.copy()
     )
     sx, sy = size[0] / w0, size[1] / h0
-    source = result.mask if result.mask is not None else result.flagged
-    if source.any():
-        overlay = cv2.resize(source.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST_EXACT)
+    if result.flagged_pixels.any():
+        overlay = result.input_mask(*size)
         tint = out.copy()
         tint[overlay > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)

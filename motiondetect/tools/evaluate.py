@@ -137,17 +137,33 @@ def cell_shares(mask: np.ndarray) -> np.ndarray:
     return cropped.reshape(rows, CELL_PX, cols, CELL_PX).mean(axis=(1, 3))
 
 
-def cell_counts(flagged: np.ndarray, positive: np.ndarray, mover_or_unknown: np.ndarray):
-    """Cell-level (tp, fp, fn) over 10x10-pixel cells.
+def cell_classes(
+    flagged: np.ndarray, positive: np.ndarray, mover_or_unknown: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each 10x10-pixel cell's class: (positive, negative, flagged), (rows, cols) bool each.
 
     A cell is positive when >= 30 % of its pixels are mover, negative when
     <= 5 % are mover or unknown, and unscored in between; it is flagged when
     >= 30 % of its pixels are flagged.
     """
-    pos = cell_shares(positive) >= CELL_POSITIVE
-    neg = cell_shares(mover_or_unknown) <= CELL_NEGATIVE
-    hit = cell_shares(flagged) >= CELL_FLAGGED
+    return (
+        cell_shares(positive) >= CELL_POSITIVE,
+        cell_shares(mover_or_unknown) <= CELL_NEGATIVE,
+        cell_shares(flagged) >= CELL_FLAGGED,
+    )
+
+
+def cell_counts(flagged: np.ndarray, positive: np.ndarray, mover_or_unknown: np.ndarray):
+    """Cell-level (tp, fp, fn) over 10x10-pixel cells (:func:`cell_classes`)."""
+    pos, neg, hit = cell_classes(flagged, positive, mover_or_unknown)
     return int((pos & hit).sum()), int((neg & hit).sum()), int((pos & ~hit).sum())
+
+
+def truth_masks(gt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(mover, unknown) pixels of a ground-truth mask, (h, w) bool each: see
+    the module doc for its values."""
+    unknown = np.isin(gt, UNKNOWN_VALUES)
+    return (gt >= 128) & ~unknown, unknown
 
 
 def score_frame(
@@ -160,8 +176,7 @@ def score_frame(
     if pred.shape != gt.shape:
         pred = cv2.resize(pred, (gt.shape[1], gt.shape[0]), interpolation=cv2.INTER_NEAREST_EXACT)
     flagged = pred > 127
-    ignore = np.isin(gt, UNKNOWN_VALUES)
-    positive = (gt >= 128) & ~ignore
+    positive, ignore = truth_masks(gt)
     scored = ~ignore
     c = Counts(frames=1)
     c.tp = int((flagged & positive).sum())
