@@ -57,8 +57,8 @@ def difference_noise(difference: np.ndarray, where: np.ndarray | None = None) ->
     (h, w) bool mask, limits it to those pixels."""
     mask = None if where is None else where.view(np.uint8)
     counts = cv2.calcHist([difference], [0], mask, [256], [0, 256]).ravel()
-    size = difference.size if where is None else int(counts.sum())
-    median = int(np.searchsorted(np.cumsum(counts), size / 2))
+    cumulative = np.cumsum(counts)
+    median = int(np.searchsorted(cumulative, cumulative[-1] / 2))
     return median * _ABS_MEDIAN_TO_SIGMA + 1.0
 
 
