@@ -65,8 +65,12 @@ def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = T
         jsonschema.validate(record, FRAME_SCHEMA)
         assert record["frame"] == i
     rows = list(csv.reader((out / "detections.csv").read_text().splitlines()))
-    assert rows[0] == ["frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score"]
+    assert rows[0] == [
+        "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track",
+    ]  # fmt: skip
     assert len(rows) - 1 == summary["totals"]["detections"]
+    tracks = [str(d.get("track", "")) for r in map(json.loads, lines) for d in r["detections"]]
+    assert [row[-1] for row in rows[1:]] == tracks
     assert (out / "events.csv").exists()
     assert (out / "timeline.png").exists() == timeline
     if video:

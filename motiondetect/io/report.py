@@ -17,7 +17,10 @@ from typing import TextIO
 
 SCHEMA_VERSION = "1.0"
 
-DETECTION_COLUMNS = ["frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score"]
+# ``track``: the object's track id (empty where the detector keeps no tracks).
+DETECTION_COLUMNS = [
+    "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track",
+]  # fmt: skip
 EVENT_COLUMNS = [
     "event",
     "start_frame",
@@ -88,6 +91,7 @@ class DetectionsCsvWriter:
                 h,
                 detection["area_px"],
                 f"{detection['score']:.4f}",
+                detection.get("track", ""),
             ]
         )
 
