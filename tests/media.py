@@ -20,11 +20,13 @@ def encode(
     time_base: Fraction | None = None,
     pts_step: int | None = None,
     stream=None,
+    container_options: dict | None = None,
 ) -> Path:
     """Encode BGR ``frames``; ``pts_step`` sets each frame's pts explicitly
     (in ``time_base``), as a camera or muxer with its own clock would."""
     h, w = frames[0].shape[:2]
-    with av.open(stream if stream is not None else str(path), "w", format=fmt) as out:
+    target = stream if stream is not None else str(path)
+    with av.open(target, "w", format=fmt, options=container_options or {}) as out:
         s = out.add_stream(codec, rate=rate, options=options or {})
         s.width, s.height, s.pix_fmt = w, h, "yuv420p"
         if time_base is not None:

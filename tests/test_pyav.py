@@ -18,6 +18,7 @@ import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
+from motiondetect.io.decode import STREAM_PROBE
 from motiondetect.io.video import open_source
 
 from .media import corrupt, encode, has_encoder, pts_times, stream_info
@@ -189,6 +190,27 @@ def test_standard_input_is_processed_as_a_stream(tmp_path, frames):
     assert summary["status"] == "complete" and summary["input"]["kind"] == "stream"
     assert summary["totals"]["frames"] == N
     assert stream_info(tmp_path / "o" / "stdin" / "annotated.mp4")["frames"] == N
+
+
+@pytest.mark.parametrize("faststart", [False, True])
+def test_piped_mp4_is_read_when_its_index_comes_first(tmp_path, faststart):
+    # Noise, so the file outgrows what FFmpeg buffers while probing a pipe.
+    noise = np.random.default_rng(0).integers(0, 256, (N, 240, 320, 3), np.uint8)
+    options = {"movflags": "+faststart"} if faststart else {}
+    mp4 = encode(tmp_path / "p.mp4", noise, options={"qp": "0"}, container_options=options)
+    mp4 = mp4.read_bytes()
+    assert len(mp4) > 2 * int(STREAM_PROBE["probesize"])
+    done = subprocess.run(
+        _cli("detect", "-", "-o", str(tmp_path / "o"), "-q", "--no-video"), input=mp4,
+        capture_output=True, timeout=120,
+    )  # fmt: skip
+    said = done.stderr.decode()
+    if faststart:
+        assert done.returncode == 0, said
+        assert summary_of(tmp_path / "o" / "stdin")["totals"]["frames"] == N
+    else:  # the index follows the frames: a pipe cannot seek back to them
+        assert done.returncode == 1 and "Traceback" not in said
+        assert "moov atom" in said and "faststart" in said
 
 
 PRODUCER = """

@@ -160,8 +160,7 @@ class AvSource(FrameSource):
         self._decoded = self._frames()
         first = next(self._decoded, None)
         if first is None:
-            damaged = f" ({self.decode_errors} damaged packets)" if self.decode_errors else ""
-            raise VideoError(f"{name}: no decodable video frames{damaged}")
+            raise VideoError(self._nothing_decoded(name))
         self._turns = round((first.rotation or 0) / 90) % 4  # counter-clockwise quarter turns
         image = self._image(first)
         check_size(image.shape[1], image.shape[0], name)
@@ -174,6 +173,18 @@ class AvSource(FrameSource):
         start = stream.start_time
         self._origin = float(start * stream.time_base) if start is not None else first.time or 0
         self._first = (first, image)
+
+    def _nothing_decoded(self, name: str) -> str:
+        if not self.seekable and "mp4" in self._container.format.name.split(","):
+            # The index of an MP4 written without faststart follows its
+            # frames, and a pipe cannot seek back to the frames after it.
+            return (
+                f"{name}: an MP4 or MOV whose index (moov atom) follows its frames cannot be "
+                "read from a pipe: give the file's path, or remux it first with "
+                "'ffmpeg -i IN -c copy -movflags +faststart OUT.mp4'"
+            )
+        damaged = f" ({self.decode_errors} damaged packets)" if self.decode_errors else ""
+        return f"{name}: no decodable video frames{damaged}"
 
     def _damaged(self, what: str) -> None:
         self.decode_errors += 1
