@@ -15,7 +15,8 @@ are the prefixes of ``compare.py``'s sequence names: ``sample``, ``davis``,
 ``ucsd``, ``sbi``, ``otb``, ``fox``. Scoring is ``compare.py``'s, frames 0-1
 unscored; sequences run in parallel (``--jobs``), one OpenCV thread each.
 Set ``MOTIONDETECT_DATA`` to score another copy of the clips (for example
-every 2nd frame, from ``benchmarks/subsample.py``).
+every 2nd frame, from ``benchmarks/subsample.py``, or through H.264 from
+``benchmarks/recompress.py``).
 """
 
 from __future__ import annotations
