@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import logging
 
+import av
 import cv2
 import numpy as np
 import pytest
@@ -47,6 +48,24 @@ def test_text_or_image_named_mp4(tmp_path, content, frames):
     result = run("detect", path, "-o", tmp_path / "o", "-q")
     assert result.exit_code == 1 and "fake.mp4" in result.output
     assert "Traceback" not in result.output
+
+
+def write_gif(path, frames):
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("gif", rate=10)
+        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "rgb8"
+        for image in [*frames, None]:
+            frame = image if image is None else av.VideoFrame.from_ndarray(image, format="bgr24")
+            out.mux(stream.encode(frame if frame is None else frame.reformat(format="rgb8")))
+    return path
+
+
+def test_an_animated_gif_is_a_video_and_a_one_frame_gif_a_still_image(tmp_path, frames):
+    result = run("detect", write_gif(tmp_path / "anim.gif", frames), "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 0, result.output
+    check_outputs(tmp_path / "o" / "anim", len(frames))
+    result = run("detect", write_gif(tmp_path / "still.gif", frames[:1]), "-o", tmp_path / "o")
+    one_failure(result, "still.gif: a still image, not a video")
 
 
 def test_truncated_video_is_processed_and_marked_partial(tmp_path, frames):

@@ -65,6 +65,15 @@ def test_start_and_end_select_one_second_with_the_sources_times(tmp_path):
     assert run("detect", SAMPLE, "-o", tmp_path, "--start", "2", "--end", "1").exit_code == 2
 
 
+def test_a_start_past_the_end_says_where_the_input_ends(tmp_path):
+    with open_source(SAMPLE) as source:
+        last = list(source)[-1]
+    result = run("detect", SAMPLE, "-o", tmp_path, "--no-video", "--start", "1000")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    said = f"no frame lies between --start and --end: the input ends at frame {last.index} "
+    assert said + f"({last.time_s:.2f} s)" in result.output
+
+
 def test_event_times_in_seconds_equal_their_frames(tmp_path):
     common = ("detect", SAMPLE, "-q", "--no-video", "--print-events")
     in_frames = run(*common, "-o", tmp_path / "a", "--min-event-frames", "15", "--pad-frames", "0")

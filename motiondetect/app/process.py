@@ -209,28 +209,46 @@ class _FrameWriters:
                 self.sink.close(keep=ok)
 
 
-def _frames_in_range(source: FrameSource, settings: Settings) -> Iterator[SourceFrame]:
-    """The frames of ``--start``/``--end``, until Ctrl-C stops a stream."""
-    for frame in source:
-        if STREAM_STOP.code and not source.seekable:
-            return  # Ctrl-C on a stream: close it with complete outputs
-        before, past = settings.in_range(frame.index, frame.time_s)
-        if past:
-            return
-        if not before:
-            yield frame
+class _InRange:
+    """The frames of ``--start``/``--end``, until Ctrl-C stops a stream;
+    ``last`` is the last frame read, in range or not."""
+
+    def __init__(self, source: FrameSource, settings: Settings) -> None:
+        self.source, self.settings = source, settings
+        self.last: SourceFrame | None = None
+
+    def __iter__(self) -> Iterator[SourceFrame]:
+        for frame in self.source:
+            if STREAM_STOP.code and not self.source.seekable:
+                return  # Ctrl-C on a stream: close it with complete outputs
+            self.last = frame
+            before, past = self.settings.in_range(frame.index, frame.time_s)
+            if past:
+                return
+            if not before:
+                yield frame
+
+    def nothing_read(self, label: str) -> str:
+        """Why no frame was processed."""
+        if self.last is None:
+            return f"{label}: no frames could be decoded"
+        return (
+            f"{label}: no frame lies between --start and --end: the input ends at frame "
+            f"{self.last.index} ({self.last.time_s:.2f} s)"
+        )
 
 
 def _detect_frames(
-    source: FrameSource, writers: _FrameWriters, settings: Settings, progress: Progress | None
+    frames: _InRange, writers: _FrameWriters, settings: Settings, progress: Progress | None
 ) -> tuple[EventTimeline, int, int]:
     """The per-frame loop; returns the timeline, the number of detections and
     the number of frames judged (the others held a result, ``--frame-skip``)."""
+    source = frames.source
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections, judged = EventTimeline(), 0, 0
-    for frame, result in detector.stream(_frames_in_range(source, settings), settings.frame_skip):
+    for frame, result in detector.stream(frames, settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])
@@ -274,15 +292,16 @@ def _process(
     _prepare(out_dir)
     writers = _FrameWriters(out_dir, settings, source)
     started = time.perf_counter()
+    frames = _InRange(source, settings)
     try:
-        timeline, detections, judged = _detect_frames(source, writers, settings, progress)
+        timeline, detections, judged = _detect_frames(frames, writers, settings, progress)
     except BaseException:
         writers.close(ok=False)
         raise
     writers.close(ok=len(timeline) > 0)
     elapsed = time.perf_counter() - started
     if len(timeline) == 0:
-        raise InputError(f"{job.label}: no frames could be decoded")
+        raise InputError(frames.nothing_read(job.label))
     events = timeline.events(settings.event_rules(source.info.fps), source.info.fps)
     with atomic_text(out_dir / "events.csv") as fp:
         write_events_csv(fp, events)

@@ -67,9 +67,19 @@ def open_source(location: str | bytes | Path, frames_fps: float | None = None) -
         raise VideoError(f"{path}: no such file or directory") from None
     except OSError as exc:
         raise VideoError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    if head.startswith(_IMAGE_MAGIC):
+    if head.startswith(_IMAGE_MAGIC) and not (head.startswith(b"GIF8") and _animated(path)):
         raise VideoError(f"{path}: a still image, not a video")
     return AvSource(path, display_name(path))
+
+
+def _animated(path: Path) -> bool:
+    """Whether an image file holds at least two frames (an animated GIF is a video)."""
+    try:
+        with av.open(str(path)) as container:
+            packets = (p for p in container.demux(video=0) if p.size)
+            return sum(1 for _, _ in zip(range(2), packets)) == 2
+    except (av.error.FFmpegError, OSError, IndexError, ValueError):
+        return False
 
 
 def to_display(image: np.ndarray) -> np.ndarray:
