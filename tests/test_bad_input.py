@@ -66,6 +66,13 @@ def test_an_animated_gif_is_a_video_and_a_one_frame_gif_a_still_image(tmp_path, 
     check_outputs(tmp_path / "o" / "anim", len(frames))
     result = run("detect", write_gif(tmp_path / "still.gif", frames[:1]), "-o", tmp_path / "o")
     one_failure(result, "still.gif: a still image, not a video")
+    batch = tmp_path / "batch"
+    batch.mkdir()
+    write_gif(batch / "anim.gif", frames)
+    write_gif(batch / "icon.gif", frames[:1])  # an image among the videos: skipped
+    result = run("detect", batch, "-o", tmp_path / "b", "-q")
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in (tmp_path / "b").iterdir() if p.is_dir()) == ["anim"]
 
 
 def test_truncated_video_is_processed_and_marked_partial(tmp_path, frames):

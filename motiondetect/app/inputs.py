@@ -17,7 +17,12 @@ from pathlib import Path
 
 from motiondetect.io.decode import STDIN, is_device, is_stream_location
 from motiondetect.io.files import display_name
-from motiondetect.io.video import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, is_frames_folder
+from motiondetect.io.video import (
+    IMAGE_EXTENSIONS,
+    VIDEO_EXTENSIONS,
+    is_animated,
+    is_frames_folder,
+)
 
 log = logging.getLogger("motiondetect")
 
@@ -153,7 +158,9 @@ class _Scanner:
                         jobs.append(InputJob(entry, str(rel)))
                 else:
                     jobs.extend(self.scan(entry, rel))
-            elif entry.suffix.lower() in VIDEO_EXTENSIONS:
+            elif entry.suffix.lower() in VIDEO_EXTENSIONS or (
+                entry.suffix.lower() == ".gif" and is_animated(entry)
+            ):
                 if self._wanted(rel, True) and self._first_visit(entry):
                     jobs.append(InputJob(entry, str(rel.with_suffix(""))))
             elif entry.suffix.lower() not in IMAGE_EXTENSIONS:

@@ -15,7 +15,7 @@ import numpy as np
 IMAGE_EXTENSIONS = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff"}
 VIDEO_EXTENSIONS = {
     ".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv", ".flv",
-    ".ts", ".mts", ".m2ts", ".3gp", ".ogv", ".y4m", ".gif",
+    ".ts", ".mts", ".m2ts", ".3gp", ".ogv", ".y4m",
 }  # fmt: skip
 DEFAULT_FRAMES_FPS = 30.0
 MIN_FRAME_SIDE = 64

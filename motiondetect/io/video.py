@@ -31,8 +31,9 @@ from motiondetect.io.source import (
 
 __all__ = [
     "DEFAULT_FRAMES_FPS", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "FrameSource", "SourceFrame",
-    "VideoError", "VideoInfo", "VideoSink", "count_decodable_frames", "is_frames_folder",
-    "is_stream_location", "numeric_key", "open_source", "read_mask", "to_display", "write_image",
+    "VideoError", "VideoInfo", "VideoSink", "count_decodable_frames", "is_animated",
+    "is_frames_folder", "is_stream_location", "numeric_key", "open_source", "read_mask",
+    "to_display", "write_image",
 ]  # fmt: skip
 
 _IMAGE_MAGIC = (b"\x89PNG", b"\xff\xd8\xff", b"BM", b"GIF8", b"II*\x00", b"MM\x00*")
@@ -67,13 +68,14 @@ def open_source(location: str | bytes | Path, frames_fps: float | None = None) -
         raise VideoError(f"{path}: no such file or directory") from None
     except OSError as exc:
         raise VideoError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    if head.startswith(_IMAGE_MAGIC) and not (head.startswith(b"GIF8") and _animated(path)):
+    if head.startswith(_IMAGE_MAGIC) and not (head.startswith(b"GIF8") and is_animated(path)):
         raise VideoError(f"{path}: a still image, not a video")
     return AvSource(path, display_name(path))
 
 
-def _animated(path: Path) -> bool:
-    """Whether an image file holds at least two frames (an animated GIF is a video)."""
+def is_animated(path: Path) -> bool:
+    """Whether an image file holds at least two frames: an animated GIF is a
+    video, a still one an image."""
     try:
         with av.open(str(path)) as container:
             packets = (p for p in container.demux(video=0) if p.size)
