@@ -20,7 +20,7 @@ import av
 import cv2
 import numpy as np
 from common import SHARED_DATA
-from subsample import UCSD_MOVING, _numbered
+from subsample import UCSD_MOVING, numbered
 
 
 def _through_h264(frames: list[Path], crf: int, tmp: Path) -> list[np.ndarray]:
@@ -39,7 +39,7 @@ def _through_h264(frames: list[Path], crf: int, tmp: Path) -> list[np.ndarray]:
 
 
 def recompress(images: Path, truth: Path, target: Path, crf: int, tmp: Path) -> None:
-    frames = _numbered(images, ".jpg")
+    frames = numbered(images, ".jpg")
     decoded = _through_h264(frames, crf, tmp)
     if len(decoded) != len(frames):
         raise SystemExit(f"{images}: {len(frames)} frames in, {len(decoded)} decoded")

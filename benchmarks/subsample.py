@@ -27,7 +27,7 @@ def _link(source: Path, target: Path) -> None:
     target.symlink_to(source.resolve())
 
 
-def _numbered(folder: Path, suffix: str) -> list[Path]:
+def numbered(folder: Path, suffix: str) -> list[Path]:
     return sorted(folder.glob(f"*{suffix}"), key=last_number)
 
 
@@ -35,7 +35,7 @@ def subsample_davis(out: Path, step: int) -> int:
     clips = 0
     for images in sorted((SHARED_DATA / "davis").glob("*/JPEGImages")):
         masks = images.parent / "Annotations"
-        for new, frame in enumerate(_numbered(images, ".jpg")[::step]):
+        for new, frame in enumerate(numbered(images, ".jpg")[::step]):
             seq = out / "davis" / images.parent.name
             _link(frame, seq / "JPEGImages" / f"{new:05d}.jpg")
             _link(masks / f"{frame.stem}.png", seq / "Annotations" / f"{new:05d}.png")
@@ -49,7 +49,7 @@ def subsample_ucsd(out: Path, step: int) -> int:
         seq = SHARED_DATA / "ucsd" / name
         if not seq.is_dir():
             continue
-        for new, frame in enumerate(_numbered(seq / "in", ".jpg")[::step], start=1):
+        for new, frame in enumerate(numbered(seq / "in", ".jpg")[::step], start=1):
             truth = seq / "groundtruth" / f"gt{last_number(frame):04d}.png"
             _link(frame, out / "ucsd" / name / "in" / f"frame_{new}.jpg")
             if truth.exists():

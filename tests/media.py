@@ -21,6 +21,7 @@ def encode(
     pts_step: int | None = None,
     stream=None,
     container_options: dict | None = None,
+    pix_fmt: str = "yuv420p",
 ) -> Path:
     """Encode BGR ``frames``; ``pts_step`` sets each frame's pts explicitly
     (in ``time_base``), as a camera or muxer with its own clock would."""
@@ -28,7 +29,7 @@ def encode(
     target = stream if stream is not None else str(path)
     with av.open(target, "w", format=fmt, options=container_options or {}) as out:
         s = out.add_stream(codec, rate=rate, options=options or {})
-        s.width, s.height, s.pix_fmt = w, h, "yuv420p"
+        s.width, s.height, s.pix_fmt = w, h, pix_fmt
         if time_base is not None:
             s.time_base = time_base
         for i, image in enumerate(frames):

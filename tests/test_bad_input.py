@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import logging
 
-import av
 import cv2
 import numpy as np
 import pytest
@@ -14,6 +13,7 @@ from motiondetect_cli.main import main
 
 from motiondetect.io.video import open_source
 
+from .media import encode
 from .scenes import scene
 from .test_cli import check_outputs, write_video
 
@@ -51,13 +51,7 @@ def test_text_or_image_named_mp4(tmp_path, content, frames):
 
 
 def write_gif(path, frames):
-    with av.open(str(path), "w") as out:
-        stream = out.add_stream("gif", rate=10)
-        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "rgb8"
-        for image in [*frames, None]:
-            frame = image if image is None else av.VideoFrame.from_ndarray(image, format="bgr24")
-            out.mux(stream.encode(frame if frame is None else frame.reformat(format="rgb8")))
-    return path
+    return encode(path, frames, "gif", rate=10, pix_fmt="rgb8")
 
 
 def test_an_animated_gif_is_a_video_and_a_one_frame_gif_a_still_image(tmp_path, frames):
