@@ -78,6 +78,13 @@ def _d(key: str) -> str:
     type=click.Path(path_type=Path, exists=True, dir_okay=False),
     help="Known camera motion (motiondetect ego-motion JSON or NeRF transforms.json).",
 )
+@click.option(
+    "--focal-share",
+    type=float,
+    help="The lens's focal length as a share of the frame's long side, its 35 mm-equivalent "
+    "focal length over 36 (a phone's main camera: 26/36); 0 turns off the test that "
+    f"drops near rigid objects {_d('focal_share')}.",
+)
 @click.option("-j", "--jobs", type=int, help="Inputs processed in parallel.")
 @click.option(
     "--scheduler",

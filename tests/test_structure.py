@@ -117,6 +117,7 @@ def test_every_config_field_is_reachable_from_toml(tmp_path):
         ("frames_fps = nan", ["--frames-fps", "nan"], "--frames-fps must be a number"),
         ("jobs = 0", ["--jobs", "0"], "--jobs must be at least 1"),
         ("persistence = 0", ["--persistence", "0"], "persistence must be positive"),
+        ("focal_share = -1", ["--focal-share", "-1"], "focal_share must not be negative"),
         ("roi = ['0,0,-5,5']", ["--roi", "0,0,-5,5"], "--roi needs a positive width"),
         ("roi = ['0,0,99999999999,10']", ["--roi", "0,0,99999999999,10"], "in range"),
     ],

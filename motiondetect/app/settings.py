@@ -54,6 +54,7 @@ SECTIONS: dict[str, type] = {
 #: sets the working size of whichever measurement ``measure`` chooses.
 CONFIG_OPTIONS: dict[str, tuple[str, str]] = {
     "persistence": ("track", "persistence"),
+    "focal_share": ("fit", "focal_share"),
     "flow_preset": ("dense_flow", "preset"),
     "ego_model": ("constraint_ray", "ego_model"),
     "arithmetic": ("stages", "arithmetic"),

@@ -110,6 +110,11 @@ class FitConfig:
         at infinity) more often than it explained real parallax, and cost
         recall everywhere (docs/detectors.md). Without it the ray of every
         point is the plane's velocity alone, and any residual is tested.
+    focal_share : float
+        Lens prior: the focal length as a share of the frame's long side
+        (0.75: a phone's main camera, 26 mm equivalent), for decomposing
+        the plane's motion into the constraint ray
+        (:mod:`~.plane_ray`; 0: no decomposition).
     """
 
     sample_step_px: int = 8
@@ -126,6 +131,7 @@ class FitConfig:
     aperture_noise: float = 1.0
     edge_px: float = 4.0
     parallax: bool = False
+    focal_share: float = 0.75
 
     def __post_init__(self) -> None:
         check_fields(
@@ -146,6 +152,7 @@ class FitConfig:
                 "blur_ratio",
                 "aperture_noise",
                 "edge_px",
+                "focal_share",
             ),
         )
         if self.min_inlier_share >= 1:

@@ -122,6 +122,13 @@ class VelocityRayConfig:
         if self.grow_ratio > 1:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
 
+    def tolerance(self, noise_px: float, spread_px: float, floor_px: float | None = None) -> float:
+        """Largest distance of a rigid point off its ray, px/frame, from the
+        plane's noise and the frame's spread (``CameraFit.noise_px``,
+        ``spread_px``) and the floor (default ``floor_px``)."""
+        floor = self.floor_px if floor_px is None else floor_px
+        return max(floor, self.noise_sigmas * noise_px, self.spread_sigmas * spread_px)
+
 
 def gap_to_segment(velocity: np.ndarray, start: np.ndarray, step: np.ndarray, bound: float):
     """Each velocity minus the nearest point of the segment ``start + s * step``,
@@ -242,18 +249,14 @@ class VelocityRayDetector:
             distance = off_ray(
                 fit.residual_px, field.pixel_grid, fit.epipole, fit.residual_length()
             )
-            spread = fit.spread_px
-            floor = cfg.floor_px
-        else:
-            gap = known_ray_gap(field, known)
-            distance = vector_length(gap)
-            # What the known motion leaves: DIS's error, the pose's error and
-            # the lens's distortion, measured over the frame like the fit's.
-            step = _SPREAD_STEP
-            spread = residual_spread(distance[step:-step:step, step:-step:step])
-            floor = cfg.known_floor_px
-        tolerance = max(floor, cfg.noise_sigmas * fit.noise_px, cfg.spread_sigmas * spread)
-        return distance, tolerance, None if known is None else gap
+            return distance, cfg.tolerance(fit.noise_px, fit.spread_px), None
+        gap = known_ray_gap(field, known)
+        distance = vector_length(gap)
+        # What the known motion leaves: DIS's error, the pose's error and
+        # the lens's distortion, measured over the frame like the fit's.
+        step = _SPREAD_STEP
+        spread = residual_spread(distance[step:-step:step, step:-step:step])
+        return distance, cfg.tolerance(fit.noise_px, spread, cfg.known_floor_px), gap
 
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         """Detect independent motion in one frame's velocity field."""

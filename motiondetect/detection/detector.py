@@ -28,11 +28,13 @@ import numpy as np
 from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
+from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
+from motiondetect.detection.rigid_depth import RigidDepth
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.stages import GRID
@@ -220,6 +222,9 @@ class MotionDetector:
         }
         self.min_cells = min(getattr(d.config, "min_cells", 3) for d in self.detectors.values())
         self.fit_config = by_type.get(FitConfig, FitConfig())
+        self.ray_config = by_type.get(VelocityRayConfig, VelocityRayConfig())
+        share = 0.0 if egomotion is not None else track.rigid_share  # known rays are exact
+        self._rigid = RigidDepth(share, self.fit_config.focal_share, self.fit_config.sample_step_px)
         self.tracker = Tracker(track)
         self._history = ChangeHistory(track.support_frames)
         rate = track.background_rate
@@ -241,6 +246,7 @@ class MotionDetector:
         self._epipole, self._recent = None, []
         self._sharpness.clear()
         self._history.reset()
+        self._rigid.reset()
         if self._background is not None:
             self._background.reset()
 
@@ -323,10 +329,12 @@ class MotionDetector:
         for out in outputs.values():
             union |= out.mask
         self._history.update(flow, fit)
+        self._rigid.update(flow, fit, self.ray_config.tolerance(fit.noise_px, fit.spread_px))
         track = self.tracker.config
         unlike = self._remembered(flow, fit, union)
         objects = group_objects(union, flow.velocity_px, track, self._support(fit, union), unlike)
         objects = assigned_objects(objects, flow, fit, track.layer_sigmas, track.min_area_share)
+        objects = self._rigid.without_rigid(objects)
         covered = sum(float(o.mask.mean()) for o in objects)
         reason = camera.reason
         if not reason and covered > self.fit_config.max_flagged_share:

@@ -94,6 +94,12 @@ class TrackConfig:
         mover that slows keeps being found where it is expected. Off by
         default: a false track (rigid parallax) feeds itself the same way
         (docs/detectors.md measures both).
+    rigid_share : float
+        A near rigid object is not a mover: an object is dropped when at
+        least this share of its pixels carries a depth on its constraint
+        ray from the last frame, and this share of those lies in front of
+        the dominant plane where that depth predicts it
+        (:mod:`.rigid_depth`; 0: off).
     """
 
     gap_px: int = 10
@@ -110,6 +116,7 @@ class TrackConfig:
     trim_share: float = 0.7
     layer_sigmas: float = 3.0
     prior: bool = False
+    rigid_share: float = 0.5
 
     def __post_init__(self) -> None:
         check_fields(
@@ -128,9 +135,10 @@ class TrackConfig:
                 "background_frames",
                 "trim_share",
                 "layer_sigmas",
+                "rigid_share",
             ),
         )
-        for name in ("background_rate", "trim_share"):
+        for name in ("background_rate", "trim_share", "rigid_share"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name} must be at most 1, but got {getattr(self, name)}")
 

@@ -1,0 +1,144 @@
+"""Nelson's constraint *ray* from the dominant plane's own motion.
+
+A rigid point's image velocity lies on a half-line in velocity space
+(section 3; Figure 2): it starts at the velocity a point at infinite depth
+would have (the camera's rotation alone) and runs, through the velocity of
+any depth in between, toward ever nearer points. The dominant plane's
+homography ``H = K (R + t n^T / d) K^-1`` fixes one point of that half-line
+at every pixel (the plane's own depth), and its decomposition into ``R``
+and ``t`` fixes the start (``K R K^-1``) and so the direction. In terms of
+the residual ``r`` (velocity minus the plane's), a rigid point at pixel
+``p`` has ``r = -k * r_inf(p)``, where ``r_inf`` is the residual of a point
+at infinity and ``k >= -1`` says how much nearer than the plane it lies
+(``k = Z_plane / Z - 1``: 0 on the plane, -1 at infinity, positive in
+front of it). ``k`` is the point's own: it stays as the camera moves,
+which is what lets a near rigid object be told from a mover over time
+(:mod:`motiondetect.detection.rigid_depth`).
+
+Two things limit it. The decomposition needs the focal length, taken from
+a lens prior (``FitConfig.focal_share``); and one homography decomposes
+two ways, both exact for the plane, which differ off it: the one under
+which more of the frame's large residuals lie on their rays is kept. When
+the plane's translation moves it by less than the residual tolerance (a
+pan, a distant plane) there is no measurable ray, and none is returned.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+def _transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """``points`` (..., 2) mapped by a 3x3 homography, float32."""
+    flat = np.ascontiguousarray(points, np.float32).reshape(-1, 1, 2)
+    return cv2.perspectiveTransform(flat, matrix).reshape(points.shape)
+
+
+@dataclass(frozen=True)
+class PlaneRay:
+    """One decomposition of the dominant plane's motion.
+
+    Attributes
+    ----------
+    homography : (3, 3) ndarray
+        The plane's homography, current work pixels to previous ones.
+    rotation : (3, 3) ndarray
+        ``K R K^-1``: the homography of the plane at infinity (rotation only).
+    normal : (3,) ndarray
+        The plane's unit normal, camera axes.
+    """
+
+    homography: np.ndarray
+    rotation: np.ndarray
+    normal: np.ndarray
+
+    def at_infinity(self, points: np.ndarray) -> np.ndarray:
+        """``r_inf``: the residual of a point at infinite depth at each of
+        ``points`` (..., 2), work px/frame, (..., 2) float32."""
+        return _transform(points, self.homography) - _transform(points, self.rotation)
+
+    @staticmethod
+    def split(residual: np.ndarray, inf: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Each residual against its ray, given the ray's start ``inf``
+        (:meth:`at_infinity` at the residuals' points): ``(k, off, length)``.
+
+        ``k`` is the position along the ray in units of ``|r_inf|`` (the
+        depth ratio of the module doc), ``off`` the distance from the
+        residual to the half-line, px/frame, and ``length`` ``|r_inf|``;
+        all (...) float32.
+        """
+        length = np.hypot(inf[..., 0], inf[..., 1])
+        safe = np.maximum(length, 1e-9)
+        ux, uy = -inf[..., 0] / safe, -inf[..., 1] / safe
+        along = residual[..., 0] * ux + residual[..., 1] * uy
+        across = np.abs(residual[..., 0] * uy - residual[..., 1] * ux)
+        beyond = np.hypot(residual[..., 0] - inf[..., 0], residual[..., 1] - inf[..., 1])
+        off = np.where(along >= -length, across, beyond)  # past infinity: from the start
+        return (along / safe).astype(np.float32), off.astype(np.float32), length.astype(np.float32)
+
+
+def decompositions(homography: np.ndarray, shape: tuple[int, int], focal_share: float) -> list:
+    """The plane's distinct decompositions under the lens prior, [PlaneRay].
+
+    ``focal_share`` is the focal length as a share of the frame's long
+    side; the principal point is the frame's centre. OpenCV returns each
+    solution with both signs of ``t`` and ``n``; those give the same ray.
+    """
+    h, w = shape
+    f = focal_share * max(h, w)
+    k = np.array([[f, 0.0, w / 2.0], [0.0, f, h / 2.0], [0.0, 0.0, 1.0]])
+    k_inv = np.array([[1 / f, 0.0, -w / (2.0 * f)], [0.0, 1 / f, -h / (2.0 * f)], [0.0, 0.0, 1.0]])
+    count, rotations, _, normals = cv2.decomposeHomographyMat(homography, k)
+    out: list[PlaneRay] = []
+    for i in range(count):
+        normal = normals[i].ravel()
+        if any(abs(float(normal @ ray.normal)) > 0.999 for ray in out):
+            continue
+        out.append(PlaneRay(homography, k @ rotations[i] @ k_inv, normal))
+    return out
+
+
+def fit_plane_ray(
+    homography: np.ndarray,
+    points: np.ndarray,
+    residual: np.ndarray,
+    tolerance: float,
+    shape: tuple[int, int],
+    focal_share: float,
+) -> PlaneRay | None:
+    """The plane's decomposition whose rays explain the frame best, or None.
+
+    Parameters
+    ----------
+    homography : (3, 3) ndarray
+    points, residual : (N, 2) ndarray
+        Grid samples of the frame and their plane residuals, work px/frame.
+    tolerance : float
+        Largest off-ray distance of an explained residual, px/frame.
+    shape : (h, w)
+    focal_share : float
+        Lens prior (:func:`decompositions`); 0: no ray.
+
+    Returns
+    -------
+    PlaneRay or None
+        The decomposition under which most residuals above ``tolerance``
+        lie on their rays (ties: the plane facing the camera most); None
+        when the chosen one's median ``|r_inf|`` is below ``tolerance``:
+        the plane's translation is then not measured.
+    """
+    if focal_share <= 0 or len(points) == 0:
+        return None
+    large = np.hypot(residual[:, 0], residual[:, 1]) > tolerance
+    best, best_key, best_length = None, None, 0.0
+    for ray in decompositions(homography, shape, focal_share):
+        inf = ray.at_infinity(points)
+        _, off, length = ray.split(residual[large], inf[large])
+        key = (int((off < tolerance).sum()), abs(float(ray.normal[2])))
+        if best_key is None or key > best_key:
+            best, best_key = ray, key
+            best_length = float(np.median(np.hypot(inf[:, 0], inf[:, 1])))
+    return best if best is not None and best_length >= tolerance else None
