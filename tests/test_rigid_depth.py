@@ -116,7 +116,7 @@ def test_a_near_rigid_object_is_dropped_and_a_mover_is_kept():
     own = np.zeros((H, W, 2), np.float32)
     own[mover] = (3.0, -2.0)
     objects = [MovingObject(m, (0, 0, 1, 1), (0.0, 0.0)) for m in (box, mover, far)]
-    rigid = RigidDepth(0.5, 0.75, 8)
+    rigid = RigidDepth(0.5, 0.75)
     # A handheld camera: its translation changes from frame to frame.
     motions = [(0.06, 0.01, 0.02), (0.03, -0.02, 0.04), (0.08, 0.02, -0.01), (0.02, 0.04, 0.03)]
     kept = []
@@ -137,7 +137,7 @@ def test_off_and_after_a_reset_nothing_is_dropped():
     depth = np.where(box, 0.4 * WALL, WALL)
     objects = [MovingObject(box, (0, 0, 1, 1), (0.0, 0.0))]
     for share in (0.0, 0.5):
-        rigid = RigidDepth(share, 0.75, 8)
+        rigid = RigidDepth(share, 0.75)
         for i, t in enumerate([(0.06, 0.01, 0.02), (0.03, -0.02, 0.04), (0.08, 0.02, -0.01)]):
             if i == 2 and share:
                 rigid.reset()  # a new input: no depth carried from the last

@@ -18,7 +18,8 @@ which is what lets a near rigid object be told from a mover over time
 Two things limit it. The decomposition needs the focal length, taken from
 a lens prior (``FitConfig.focal_share``); and one homography decomposes
 two ways, both exact for the plane, which differ off it: the one under
-which more of the frame's large residuals lie on their rays is kept. When
+which more of the frame's large residuals keep the depth they had in the
+last frame is kept, else the one under which more lie on their rays. When
 the plane's translation moves it by less than the residual tolerance (a
 pan, a distant plane) there is no measurable ray, and none is returned.
 """
@@ -108,6 +109,7 @@ def fit_plane_ray(
     tolerance: float,
     shape: tuple[int, int],
     focal_share: float,
+    depth: np.ndarray | None = None,
 ) -> PlaneRay | None:
     """The plane's decomposition whose rays explain the frame best, or None.
 
@@ -121,23 +123,32 @@ def fit_plane_ray(
     shape : (h, w)
     focal_share : float
         Lens prior (:func:`decompositions`); 0: no ray.
+    depth : (N,) ndarray, optional
+        Each sample's depth on its ray (``k``) in the last frame, carried
+        to it (NaN: none).
 
     Returns
     -------
     PlaneRay or None
         The decomposition under which most residuals above ``tolerance``
-        lie on their rays (ties: the plane facing the camera most); None
-        when the chosen one's median ``|r_inf|`` is below ``tolerance``:
-        the plane's translation is then not measured.
+        keep the depth they had (a rigid world keeps its depths), then under
+        which most lie on their rays, then whose plane faces the camera
+        most; None when the chosen one's median ``|r_inf|`` is below
+        ``tolerance``: the plane's translation is then not measured.
     """
     if focal_share <= 0 or len(points) == 0:
         return None
     large = np.hypot(residual[:, 0], residual[:, 1]) > tolerance
+    if depth is None:
+        depth = np.full(len(points), np.nan, np.float32)
+    known = large & np.isfinite(depth)
     best, best_key, best_length = None, None, 0.0
     for ray in decompositions(homography, shape, focal_share):
         inf = ray.at_infinity(points)
-        _, off, length = ray.split(residual[large], inf[large])
-        key = (int((off < tolerance).sum()), abs(float(ray.normal[2])))
+        _, off, _ = ray.split(residual[large], inf[large])
+        gap = residual[known] + depth[known, None] * inf[known]  # less the depth's prediction
+        kept = int((np.hypot(gap[:, 0], gap[:, 1]) < tolerance).sum())
+        key = (kept, int((off < tolerance).sum()), abs(float(ray.normal[2])))
         if best_key is None or key > best_key:
             best, best_key = ray, key
             best_length = float(np.median(np.hypot(inf[:, 0], inf[:, 1])))

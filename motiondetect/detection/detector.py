@@ -224,7 +224,7 @@ class MotionDetector:
         self.fit_config = by_type.get(FitConfig, FitConfig())
         self.ray_config = by_type.get(VelocityRayConfig, VelocityRayConfig())
         share = 0.0 if egomotion is not None else track.rigid_share  # known rays are exact
-        self._rigid = RigidDepth(share, self.fit_config.focal_share, self.fit_config.sample_step_px)
+        self._rigid = RigidDepth(share, self.fit_config.focal_share)
         self.tracker = Tracker(track)
         self._history = ChangeHistory(track.support_frames)
         rate = track.background_rate

@@ -58,12 +58,10 @@ class RigidDepth:
         the plane and predicted on this frame and the last (0: off).
     focal_share : float
         The lens prior of the plane's decomposition (``FitConfig.focal_share``).
-    step : int
-        Grid step of the samples that choose the decomposition, work px.
     """
 
-    def __init__(self, share: float, focal_share: float, step: int) -> None:
-        self.share, self.focal_share, self.step = share, focal_share, step
+    def __init__(self, share: float, focal_share: float) -> None:
+        self.share, self.focal_share = share, focal_share
         self._depth: np.ndarray | None = None  # (h, w) float32, NaN: none
         self._rigid: np.ndarray | None = None  # this frame's explained pixels
         self._known: np.ndarray | None = None  # where a depth was carried
@@ -92,11 +90,9 @@ class RigidDepth:
             before = _moved(carried, source, np.nan)
             if explained is not None:
                 previously = _moved(explained.view(np.uint8), source, 0) > 0
-        s = self.step
         ray = fit_plane_ray(
-            fit.homography, field.pixel_grid[s:-s:s, s:-s:s].reshape(-1, 2),
-            fit.residual_px[s:-s:s, s:-s:s].reshape(-1, 2), tolerance, field.shape,
-            self.focal_share,
+            fit.homography, grid.reshape(-1, 2), residual.reshape(-1, 2), tolerance,
+            field.shape, self.focal_share, None if before is None else before.reshape(-1),
         )  # fmt: skip
         if ray is None:
             self._depth, self._predicted = before, previously
