@@ -55,8 +55,10 @@ def test_rigid_points_at_any_depth_lie_on_the_chosen_half_ray(share):
     # The choice sees the frame: the wall (on the plane) and a few depths off it.
     mixed = np.where(np.arange(len(PIXELS)) % 3 == 0, WALL * 0.5, WALL)
     mixed_residual, _ = residuals(PIXELS, mixed, r, t)
-    ray = fit_plane_ray(h, PIXELS, mixed_residual, 0.05, (H, W), 0.75)
-    assert ray is not None
+    fitted = fit_plane_ray(h, PIXELS, mixed_residual, 0.05, (H, W), 0.75)
+    assert fitted is not None
+    ray, start = fitted
+    assert np.allclose(start, ray.at_infinity(PIXELS))
     k, off, _ = PlaneRay.split(residual, ray.at_infinity(PIXELS))
     assert off.max() < 0.02
     # Nearer than the plane: positive; on it: 0; beyond it: down to -1 at infinity.

@@ -110,7 +110,7 @@ def fit_plane_ray(
     shape: tuple[int, int],
     focal_share: float,
     depth: np.ndarray | None = None,
-) -> PlaneRay | None:
+) -> tuple[PlaneRay, np.ndarray] | None:
     """The plane's decomposition whose rays explain the frame best, or None.
 
     Parameters
@@ -129,11 +129,11 @@ def fit_plane_ray(
 
     Returns
     -------
-    PlaneRay or None
-        The decomposition under which most residuals above ``tolerance``
-        keep the depth they had (a rigid world keeps its depths), then under
-        which most lie on their rays, then whose plane faces the camera
-        most; None when the chosen one's median ``|r_inf|`` is below
+    (PlaneRay, (N, 2) ndarray) or None
+        The decomposition, with ``r_inf`` at ``points``, under which most
+        residuals above ``tolerance`` keep the depth they had (a rigid world
+        keeps its depths), then under which most lie on their rays, then
+        whose plane faces the camera most; None when the chosen one's median ``|r_inf|`` is below
         ``tolerance``: the plane's translation is then not measured.
     """
     if focal_share <= 0 or len(points) == 0:
@@ -142,7 +142,7 @@ def fit_plane_ray(
     if depth is None:
         depth = np.full(len(points), np.nan, np.float32)
     known = large & np.isfinite(depth)
-    best, best_key, best_length = None, None, 0.0
+    best, best_key = None, None
     for ray in decompositions(homography, shape, focal_share):
         inf = ray.at_infinity(points)
         _, off, _ = ray.split(residual[large], inf[large])
@@ -150,6 +150,7 @@ def fit_plane_ray(
         kept = int((np.hypot(gap[:, 0], gap[:, 1]) < tolerance).sum())
         key = (kept, int((off < tolerance).sum()), abs(float(ray.normal[2])))
         if best_key is None or key > best_key:
-            best, best_key = ray, key
-            best_length = float(np.median(np.hypot(inf[:, 0], inf[:, 1])))
-    return best if best is not None and best_length >= tolerance else None
+            best, best_key = (ray, inf), key
+    if best is None or np.median(np.hypot(best[1][:, 0], best[1][:, 1])) < tolerance:
+        return None
+    return best

@@ -47,6 +47,10 @@ def _moved(image: np.ndarray, source: np.ndarray, outside: float) -> np.ndarray:
     )
 
 
+def _grid(values: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
+    return None if values is None else values.reshape(shape)
+
+
 class RigidDepth:
     """Each pixel's depth on its ray, carried from frame to frame.
 
@@ -63,9 +67,9 @@ class RigidDepth:
     def __init__(self, share: float, focal_share: float) -> None:
         self.share, self.focal_share = share, focal_share
         self._depth: np.ndarray | None = None  # (h, w) float32, NaN: none
-        self._rigid: np.ndarray | None = None  # this frame's explained pixels
-        self._known: np.ndarray | None = None  # where a depth was carried
-        self._predicted: np.ndarray | None = None  # last frame's explained pixels
+        self._rigid: np.ndarray | None = None  # (n,) this frame's explained grid points
+        self._known: np.ndarray | None = None  # (n,) where a depth was carried
+        self._predicted: np.ndarray | None = None  # (h, w) last frame's explained points
 
     def reset(self) -> None:
         self._depth = self._rigid = self._known = self._predicted = None
@@ -83,32 +87,34 @@ class RigidDepth:
         self._rigid = self._known = None
         if self.share <= 0 or fit.homography is None or fit.residual_px is None:
             return
-        grid, residual = field.pixel_grid[::_STEP, ::_STEP], fit.residual_px[::_STEP, ::_STEP]
+        shape = fit.residual_px[::_STEP, ::_STEP].shape[:2]
+        grid = np.ascontiguousarray(field.pixel_grid[::_STEP, ::_STEP]).reshape(-1, 2)
+        residual = np.ascontiguousarray(fit.residual_px[::_STEP, ::_STEP]).reshape(-1, 2)
         before = previously = None
-        if carried is not None and carried.shape == grid.shape[:2]:
+        if carried is not None and carried.shape == shape:
             source = field.source_px[::_STEP, ::_STEP] / np.float32(_STEP)
-            before = _moved(carried, source, np.nan)
+            before = _moved(carried, source, np.nan).ravel()
             if explained is not None:
-                previously = _moved(explained.view(np.uint8), source, 0) > 0
-        ray = fit_plane_ray(
-            fit.homography, grid.reshape(-1, 2), residual.reshape(-1, 2), tolerance,
-            field.shape, self.focal_share, None if before is None else before.reshape(-1),
-        )  # fmt: skip
-        if ray is None:
-            self._depth, self._predicted = before, previously
+                previously = _moved(explained.view(np.uint8), source, 0).ravel() > 0
+        fitted = fit_plane_ray(
+            fit.homography, grid, residual, tolerance, field.shape, self.focal_share, before
+        )
+        if fitted is None:
+            self._depth, self._predicted = _grid(before, shape), _grid(previously, shape)
             return
-        inf = ray.at_infinity(grid)
+        ray, inf = fitted
         k, off, length = ray.split(residual, inf)
         on_ray = (off < tolerance) & (length > max(fit.noise_px, 1e-3))
-        self._depth = np.where(on_ray, k, np.nan).astype(np.float32)
+        self._depth = np.where(on_ray, k, np.nan).astype(np.float32).reshape(shape)
         if before is None:
             return
         self._known = np.isfinite(before)
-        gap = residual + before[..., None] * inf  # the residual less its prediction
+        gap = residual + before[:, None] * inf  # the residual less its prediction
         near = k * length > tolerance
-        self._predicted = self._known & (np.hypot(gap[..., 0], gap[..., 1]) < tolerance) & near
+        predicted = self._known & (np.hypot(gap[:, 0], gap[:, 1]) < tolerance) & near
+        self._predicted = predicted.reshape(shape)
         # Predicted on this frame and the last: once is a mover's coincidence.
-        self._rigid = self._predicted & previously if previously is not None else None
+        self._rigid = predicted & previously if previously is not None else None
 
     def without_rigid(self, objects: list[MovingObject]) -> list[MovingObject]:
         """``objects`` less those this frame's depths explain as rigid."""
@@ -116,7 +122,7 @@ class RigidDepth:
             return objects
         kept = []
         for obj in objects:
-            inside = obj.mask[::_STEP, ::_STEP]
+            inside = obj.mask[::_STEP, ::_STEP].ravel()
             known = self._known[inside]
             if known.size and known.mean() >= self.share:
                 if self._rigid[inside][known].mean() >= self.share:
