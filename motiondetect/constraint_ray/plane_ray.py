@@ -11,8 +11,11 @@ the residual ``r`` (velocity minus the plane's), a rigid point at pixel
 ``p`` has ``r = -k * r_inf(p)``, where ``r_inf`` is the residual of a point
 at infinity and ``k >= -1`` says how much nearer than the plane it lies
 (``k = Z_plane / Z - 1``: 0 on the plane, -1 at infinity, positive in
-front of it). ``k`` is the point's own: it stays as the camera moves,
-which is what lets a near rigid object be told from a mover over time
+front of it). ``k = h / (d - h)``, where ``h`` is the point's height over
+the plane and ``d`` the plane's distance: ``h`` is the rigid point's own,
+and ``d`` changes by a ratio the decomposition gives, so last frame's ``k``
+predicts this frame's (:meth:`PlaneRay.depth_from_height`), which is what
+lets a near rigid object be told from a mover over time
 (:mod:`motiondetect.detection.rigid_depth`).
 
 Two things limit it. The decomposition needs the focal length, taken from
@@ -35,6 +38,8 @@ import numpy as np
 def _transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     """``points`` (..., 2) mapped by a 3x3 homography, float32."""
     flat = np.ascontiguousarray(points, np.float32).reshape(-1, 1, 2)
+    if not len(flat):
+        return np.zeros(points.shape, np.float32)
     return cv2.perspectiveTransform(flat, matrix).reshape(points.shape)
 
 
@@ -50,11 +55,21 @@ class PlaneRay:
         ``K R K^-1``: the homography of the plane at infinity (rotation only).
     normal : (3,) ndarray
         The plane's unit normal, camera axes.
+    distance_ratio : float
+        The plane's distance from the camera in the previous frame over its
+        distance now, ``1 + (R n) . t / d``.
     """
 
     homography: np.ndarray
     rotation: np.ndarray
     normal: np.ndarray
+    distance_ratio: float
+
+    def depth_from_height(self, height: np.ndarray) -> np.ndarray:
+        """``k`` now of rigid points whose height over the plane, in units of
+        its distance, was ``height`` in the previous frame (:func:`height`)."""
+        scaled = height * np.float32(self.distance_ratio)
+        return scaled / np.maximum(1.0 - scaled, 1e-3)
 
     def at_infinity(self, points: np.ndarray) -> np.ndarray:
         """``r_inf``: the residual of a point at infinite depth at each of
@@ -81,6 +96,18 @@ class PlaneRay:
         return (along / safe).astype(np.float32), off.astype(np.float32), length.astype(np.float32)
 
 
+def height(k: np.ndarray) -> np.ndarray:
+    """A point's height over the plane in units of the plane's distance,
+    ``h / d = k / (1 + k)``, from its depth ratio ``k`` (NaN at infinity).
+
+    Unlike ``k``, which depends on the viewing ray through the plane, it
+    changes only as the camera nears or leaves the plane
+    (:meth:`PlaneRay.depth_from_height`).
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(k > -1.0, k / (1.0 + k), np.nan).astype(np.float32)
+
+
 def decompositions(homography: np.ndarray, shape: tuple[int, int], focal_share: float) -> list:
     """The plane's distinct decompositions under the lens prior, [PlaneRay].
 
@@ -92,13 +119,14 @@ def decompositions(homography: np.ndarray, shape: tuple[int, int], focal_share: 
     f = focal_share * max(h, w)
     k = np.array([[f, 0.0, w / 2.0], [0.0, f, h / 2.0], [0.0, 0.0, 1.0]])
     k_inv = np.array([[1 / f, 0.0, -w / (2.0 * f)], [0.0, 1 / f, -h / (2.0 * f)], [0.0, 0.0, 1.0]])
-    count, rotations, _, normals = cv2.decomposeHomographyMat(homography, k)
+    count, rotations, translations, normals = cv2.decomposeHomographyMat(homography, k)
     out: list[PlaneRay] = []
     for i in range(count):
         normal = normals[i].ravel()
         if any(abs(float(normal @ ray.normal)) > 0.999 for ray in out):
             continue
-        out.append(PlaneRay(homography, k @ rotations[i] @ k_inv, normal))
+        ratio = 1.0 + float((rotations[i] @ normal) @ translations[i].ravel())
+        out.append(PlaneRay(homography, k @ rotations[i] @ k_inv, normal, ratio))
     return out
 
 
@@ -124,8 +152,8 @@ def fit_plane_ray(
     focal_share : float
         Lens prior (:func:`decompositions`); 0: no ray.
     depth : (N,) ndarray, optional
-        Each sample's depth on its ray (``k``) in the last frame, carried
-        to it (NaN: none).
+        Each sample's :func:`height` in the last frame, carried to it (NaN:
+        none).
 
     Returns
     -------
@@ -146,7 +174,8 @@ def fit_plane_ray(
     for ray in decompositions(homography, shape, focal_share):
         inf = ray.at_infinity(points)
         _, off, _ = ray.split(residual[large], inf[large])
-        gap = residual[known] + depth[known, None] * inf[known]  # less the depth's prediction
+        expected = ray.depth_from_height(depth[known])
+        gap = residual[known] + expected[:, None] * inf[known]  # less the depth's prediction
         kept = int((np.hypot(gap[:, 0], gap[:, 1]) < tolerance).sum())
         key = (kept, int((off < tolerance).sum()), abs(float(ray.normal[2])))
         if best_key is None or key > best_key:

@@ -3,11 +3,11 @@
 Between two frames one near rigid object (a mounted head standing out of
 the wall it hangs on, a post before a hedge) and one mover are alike: both
 move off the dominant plane, coherently. Over time they differ. A rigid
-point keeps its depth, so its position on its constraint ray, ``k``
-(:mod:`motiondetect.constraint_ray.plane_ray`), stays while the camera's
-translation changes, and its residual is predicted by last frame's ``k``
-and this frame's ray: ``-k * r_inf``. A mover's residual is its own
-motion and follows no such rule.
+point keeps its height over the plane, so its position on its constraint
+ray, ``k`` (:mod:`motiondetect.constraint_ray.plane_ray`), follows from
+last frame's while the camera's translation changes, and its residual is
+predicted by that and this frame's ray: ``-k * r_inf``. A mover's residual
+is its own motion and follows no such rule.
 
 An object is dropped as rigid when most of its pixels sit in front of the
 plane and were predicted so, within the constraint ray filter's tolerance,
@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
-from motiondetect.constraint_ray.plane_ray import fit_plane_ray
+from motiondetect.constraint_ray.plane_ray import fit_plane_ray, height
 from motiondetect.detection.objects import MovingObject
 from motiondetect.measurement.dense_flow import VelocityField
 
@@ -105,11 +105,12 @@ class RigidDepth:
         ray, inf = fitted
         k, off, length = ray.split(residual, inf)
         on_ray = (off < tolerance) & (length > max(fit.noise_px, 1e-3))
-        self._depth = np.where(on_ray, k, np.nan).astype(np.float32).reshape(shape)
+        self._depth = np.where(on_ray, height(k), np.nan).astype(np.float32).reshape(shape)
         if before is None:
             return
         self._known = np.isfinite(before)
-        gap = residual + before[:, None] * inf  # the residual less its prediction
+        expected = ray.depth_from_height(np.nan_to_num(before))
+        gap = residual + expected[:, None] * inf  # the residual less its prediction
         near = k * length > tolerance
         predicted = self._known & (np.hypot(gap[:, 0], gap[:, 1]) < tolerance) & near
         self._predicted = predicted.reshape(shape)
