@@ -71,6 +71,13 @@ class PlaneRay:
         scaled = height * np.float32(self.distance_ratio)
         return scaled / np.maximum(1.0 - scaled, 1e-3)
 
+    def prediction_gap(self, residual: np.ndarray, inf: np.ndarray, height: np.ndarray):
+        """How far each residual (N, 2) lies from what a rigid point of last
+        frame's ``height`` (N,) would have now, ``-k * r_inf`` (``inf``:
+        :meth:`at_infinity` at its point), px/frame, (N,) float32."""
+        gap = residual + self.depth_from_height(height)[:, None] * inf
+        return np.hypot(gap[:, 0], gap[:, 1])
+
     def at_infinity(self, points: np.ndarray) -> np.ndarray:
         """``r_inf``: the residual of a point at infinite depth at each of
         ``points`` (..., 2), work px/frame, (..., 2) float32."""
@@ -100,9 +107,9 @@ def height(k: np.ndarray) -> np.ndarray:
     """A point's height over the plane in units of the plane's distance,
     ``h / d = k / (1 + k)``, from its depth ratio ``k`` (NaN at infinity).
 
-    Unlike ``k``, which depends on the viewing ray through the plane, it
-    changes only as the camera nears or leaves the plane
-    (:meth:`PlaneRay.depth_from_height`).
+    ``h`` is the rigid point's own, so this changes only with ``d``, by the
+    ratio the decomposition gives (:meth:`PlaneRay.depth_from_height`);
+    ``k = h / (d - h)`` changes less simply.
     """
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(k > -1.0, k / (1.0 + k), np.nan).astype(np.float32)
@@ -118,7 +125,7 @@ def decompositions(homography: np.ndarray, shape: tuple[int, int], focal_share: 
     h, w = shape
     f = focal_share * max(h, w)
     k = np.array([[f, 0.0, w / 2.0], [0.0, f, h / 2.0], [0.0, 0.0, 1.0]])
-    k_inv = np.array([[1 / f, 0.0, -w / (2.0 * f)], [0.0, 1 / f, -h / (2.0 * f)], [0.0, 0.0, 1.0]])
+    k_inv = np.linalg.inv(k)
     count, rotations, translations, normals = cv2.decomposeHomographyMat(homography, k)
     out: list[PlaneRay] = []
     for i in range(count):
@@ -161,8 +168,9 @@ def fit_plane_ray(
         The decomposition, with ``r_inf`` at ``points``, under which most
         residuals above ``tolerance`` keep the depth they had (a rigid world
         keeps its depths), then under which most lie on their rays, then
-        whose plane faces the camera most; None when the chosen one's median ``|r_inf|`` is below
-        ``tolerance``: the plane's translation is then not measured.
+        whose plane faces the camera most; None when the chosen one's median
+        ``|r_inf|`` is below ``tolerance``: the plane's translation is then
+        not measured.
     """
     if focal_share <= 0 or len(points) == 0:
         return None
@@ -174,9 +182,8 @@ def fit_plane_ray(
     for ray in decompositions(homography, shape, focal_share):
         inf = ray.at_infinity(points)
         _, off, _ = ray.split(residual[large], inf[large])
-        expected = ray.depth_from_height(depth[known])
-        gap = residual[known] + expected[:, None] * inf[known]  # less the depth's prediction
-        kept = int((np.hypot(gap[:, 0], gap[:, 1]) < tolerance).sum())
+        gap = ray.prediction_gap(residual[known], inf[known], depth[known])
+        kept = int((gap < tolerance).sum())
         key = (kept, int((off < tolerance).sum()), abs(float(ray.normal[2])))
         if best_key is None or key > best_key:
             best, best_key = (ray, inf), key

@@ -109,10 +109,9 @@ class RigidDepth:
         if before is None:
             return
         self._known = np.isfinite(before)
-        expected = ray.depth_from_height(np.nan_to_num(before))
-        gap = residual + expected[:, None] * inf  # the residual less its prediction
+        gap = ray.prediction_gap(residual, inf, np.nan_to_num(before))
         near = k * length > tolerance
-        predicted = self._known & (np.hypot(gap[:, 0], gap[:, 1]) < tolerance) & near
+        predicted = self._known & (gap < tolerance) & near
         self._predicted = predicted.reshape(shape)
         # Predicted on this frame and the last: once is a mover's coincidence.
         self._rigid = predicted & previously if previously is not None else None
