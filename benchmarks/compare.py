@@ -295,7 +295,7 @@ def reading(pooled: dict[str, Counts]) -> list[str]:
         "have kept, for two frames running, the depth on their constraint rays (from the",
         "plane's decomposition under a lens prior) that the frame before measured; that",
         "needs a measurable camera translation and a lens near the prior, and on the",
-        "fox clip it removes about a third of the false alarms (docs/maths.md, section 7).",
+        "fox clip it removes about two fifths of the false alarms (docs/maths.md, section 7).",
         "Along straight edges and stripes the flow",
         "is not measured but filled in (the aperture problem), so a seed is tested only",
         "on the part of the residual the image determines, and only where the flow",

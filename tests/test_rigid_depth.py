@@ -9,7 +9,13 @@ import cv2
 import numpy as np
 import pytest
 
-from motiondetect.constraint_ray.plane_ray import PlaneRay, decompositions, fit_plane_ray, height
+from motiondetect.constraint_ray.plane_ray import (
+    PlaneRay,
+    decompositions,
+    fit_plane_ray,
+    height,
+    height_bounds,
+)
 from motiondetect.detection.objects import MovingObject
 from motiondetect.detection.rigid_depth import RigidDepth
 
@@ -131,6 +137,49 @@ def test_a_near_rigid_object_is_dropped_and_a_mover_is_kept():
     # box has been predicted twice running and is dropped; the mover never
     # is, nor the far side, which is never judged.
     assert kept == [[0, 1, 2], [0, 1, 2], [1, 2], [1, 2]]
+
+
+def test_a_depth_measured_under_a_small_translation_predicts_within_its_bounds():
+    """A depth measured while the plane's translation is small is known only
+    to within the tolerance over ``|r_inf|``; when the translation then grows
+    fivefold, its prediction is as loose, and the box is still dropped (a
+    point prediction misses it). A mover is still kept."""
+    box = np.zeros((H, W), bool)
+    box[60:140, 40:120] = True
+    mover = np.zeros((H, W), bool)
+    mover[80:160, 200:280] = True
+    depth = np.where(box, 0.4 * WALL, WALL)
+    objects = [MovingObject(m, (0, 0, 1, 1), (0.0, 0.0)) for m in (box, mover)]
+    rng = np.random.default_rng(1)
+    rigid = RigidDepth(0.5, 0.75)
+    kept = []
+    for t in [(0.02, 0.0, 0.0), (0.1, 0.01, 0.0), (0.09, -0.01, 0.01)]:
+        own = rng.uniform(-0.3, 0.3, (H, W, 2)).astype(np.float32)  # flow noise
+        own[mover] += (3.0, -2.0)
+        field, fit = _frame(rotation(0.0, -0.002, 0.0), np.array(t), depth, own)
+        rigid.update(field, fit, tolerance=0.5)
+        left = rigid.without_rigid(objects)
+        kept.append([i for i, obj in enumerate(objects) if any(obj is o for o in left)])
+    assert kept == [[0, 1], [0, 1], [1]]
+
+
+def test_a_prediction_is_as_loose_as_the_depth_it_comes_from():
+    ray = PlaneRay(np.eye(3), np.eye(3), np.array([0.0, 0.0, 1.0]), 1.0)
+    inf = np.array([[-2.0, 0.0]] * 5, np.float32)  # the ray runs toward +x, |r_inf| 2 px
+    # k = 0.5 known to +-0.3: a prediction of 1 px along the ray, within
+    # sqrt(0.4^2 + (0.3 * 2)^2) = 0.72 px (this frame's tolerance 0.4).
+    heights = height_bounds(np.full(5, 0.5, np.float32), np.full(5, 0.3, np.float32))
+    low, high = (ray.depth_from_height(heights[:, i]) for i in (0, 1))
+    assert np.allclose([low[0], high[0]], [0.2, 0.8], atol=1e-5)
+    residual = np.array([[1.0, 0.0], [1.7, 0.0], [1.75, 0.0], [1.0, 0.7], [0.2, 0.0]], np.float32)
+    assert ray.predicts(residual, inf, heights, 0.4).tolist() == [True, True, False, True, False]
+    # An exact depth predicts to within this frame's tolerance alone.
+    exact = height_bounds(np.full(5, 0.5, np.float32), np.zeros(5, np.float32))
+    assert ray.predicts(residual, inf, exact, 0.4).tolist() == [True] + [False] * 4
+    # A depth that may be at infinity gets a very low bound, k -1 now.
+    far = height_bounds(np.array([-0.5], np.float32), np.array([0.6], np.float32))
+    assert far[0, 0] < -1e6
+    assert abs(ray.depth_from_height(far[:, 0])[0] + 1.0) < 1e-5
 
 
 def test_off_and_after_a_reset_nothing_is_dropped():

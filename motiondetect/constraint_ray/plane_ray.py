@@ -43,6 +43,11 @@ def _transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     return cv2.perspectiveTransform(flat, matrix).reshape(points.shape)
 
 
+#: The lowest height kept (plane distances below the plane), standing for
+#: "at infinity": its depth ratio now is -1 to float32 precision.
+_FAR = np.float32(1e7)
+
+
 @dataclass(frozen=True)
 class PlaneRay:
     """One decomposition of the dominant plane's motion.
@@ -71,12 +76,25 @@ class PlaneRay:
         scaled = height * np.float32(self.distance_ratio)
         return scaled / np.maximum(1.0 - scaled, 1e-3)
 
-    def prediction_gap(self, residual: np.ndarray, inf: np.ndarray, height: np.ndarray):
-        """How far each residual (N, 2) lies from what a rigid point of last
-        frame's ``height`` (N,) would have now, ``-k * r_inf`` (``inf``:
-        :meth:`at_infinity` at its point), px/frame, (N,) float32."""
-        gap = residual + self.depth_from_height(height)[:, None] * inf
-        return np.hypot(gap[:, 0], gap[:, 1])
+    def predicts(
+        self, residual: np.ndarray, inf: np.ndarray, heights: np.ndarray, tolerance: float
+    ) -> np.ndarray:
+        """Whether each residual (N, 2) is what a rigid point would have now
+        whose height was within last frame's bounds ``heights`` (N, 2: low,
+        high; :func:`height_bounds`), (N,) bool. ``inf``: :meth:`at_infinity`
+        at the residuals' points; ``tolerance``: this frame's, px/frame.
+
+        The prediction is ``-k * r_inf`` at the middle of the bounds' depths
+        now. Its error has two independent sources, each bounded at the same
+        confidence: this frame's residual, within ``tolerance``, and last
+        frame's depth, within half the bounds' spread of ``k`` times
+        ``|r_inf|`` now (which grows with the plane's translation). Their
+        difference is bounded by the root of the sum of squares.
+        """
+        low, high = self.depth_from_height(heights[:, 0]), self.depth_from_height(heights[:, 1])
+        gap = residual + (0.5 * (low + high))[:, None] * inf
+        carried = 0.5 * (high - low) * np.hypot(inf[:, 0], inf[:, 1])
+        return gap[:, 0] ** 2 + gap[:, 1] ** 2 < np.float32(tolerance) ** 2 + carried**2
 
     def at_infinity(self, points: np.ndarray) -> np.ndarray:
         """``r_inf``: the residual of a point at infinite depth at each of
@@ -113,6 +131,16 @@ def height(k: np.ndarray) -> np.ndarray:
     """
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(k > -1.0, k / (1.0 + k), np.nan).astype(np.float32)
+
+
+def height_bounds(k: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """Bounds on a point's :func:`height` from its depth ratio ``k`` known
+    to within ``spread`` either way (the residual's tolerance over
+    ``|r_inf|``): (..., 2) float32, low and high. A point that may lie at
+    infinity has a very low bound (the height's limit there is minus
+    infinity; its depth ratio, -1, is kept exactly)."""
+    bounds = np.stack([height(k - spread), height(k + spread)], -1)
+    return np.nan_to_num(np.maximum(bounds, -_FAR), nan=-_FAR)
 
 
 def decompositions(homography: np.ndarray, shape: tuple[int, int], focal_share: float) -> list:
@@ -158,9 +186,9 @@ def fit_plane_ray(
     shape : (h, w)
     focal_share : float
         Lens prior (:func:`decompositions`); 0: no ray.
-    depth : (N,) ndarray, optional
-        Each sample's :func:`height` in the last frame, carried to it (NaN:
-        none).
+    depth : (N, 2) ndarray, optional
+        Each sample's :func:`height_bounds` in the last frame, carried to it
+        (NaN: none).
 
     Returns
     -------
@@ -176,14 +204,13 @@ def fit_plane_ray(
         return None
     large = np.hypot(residual[:, 0], residual[:, 1]) > tolerance
     if depth is None:
-        depth = np.full(len(points), np.nan, np.float32)
-    known = large & np.isfinite(depth)
+        depth = np.full((len(points), 2), np.nan, np.float32)
+    known = large & np.isfinite(depth[:, 1])
     best, best_key = None, None
     for ray in decompositions(homography, shape, focal_share):
         inf = ray.at_infinity(points)
         _, off, _ = ray.split(residual[large], inf[large])
-        gap = ray.prediction_gap(residual[known], inf[known], depth[known])
-        kept = int((gap < tolerance).sum())
+        kept = int(ray.predicts(residual[known], inf[known], depth[known], tolerance).sum())
         key = (kept, int((off < tolerance).sum()), abs(float(ray.normal[2])))
         if best_key is None or key > best_key:
             best, best_key = (ray, inf), key

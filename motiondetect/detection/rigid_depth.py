@@ -7,7 +7,10 @@ point keeps its height over the plane, so its position on its constraint
 ray, ``k`` (:mod:`motiondetect.constraint_ray.plane_ray`), follows from
 last frame's while the camera's translation changes, and its residual is
 predicted by that and this frame's ray: ``-k * r_inf``. A mover's residual
-is its own motion and follows no such rule.
+is its own motion and follows no such rule. Each depth is carried as the
+bounds it was measured to (the tolerance over ``|r_inf|``), so its
+prediction is as loose as the measurement was
+(:meth:`~motiondetect.constraint_ray.plane_ray.PlaneRay.predicts`).
 
 An object is dropped as rigid when most of its pixels sit in front of the
 plane and were predicted so, within the constraint ray filter's tolerance,
@@ -30,7 +33,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
-from motiondetect.constraint_ray.plane_ray import fit_plane_ray, height
+from motiondetect.constraint_ray.plane_ray import fit_plane_ray, height_bounds
 from motiondetect.detection.objects import MovingObject
 from motiondetect.measurement.dense_flow import VelocityField
 
@@ -66,7 +69,7 @@ class RigidDepth:
 
     def __init__(self, share: float, focal_share: float) -> None:
         self.share, self.focal_share = share, focal_share
-        self._depth: np.ndarray | None = None  # (h, w) float32, NaN: none
+        self._depth: np.ndarray | None = None  # (h, w, 2) height bounds, NaN: none
         self._rigid: np.ndarray | None = None  # (n,) this frame's explained grid points
         self._known: np.ndarray | None = None  # (n,) where a depth was carried
         self._predicted: np.ndarray | None = None  # (h, w) last frame's explained points
@@ -88,30 +91,33 @@ class RigidDepth:
         if self.share <= 0 or fit.homography is None or fit.residual_px is None:
             return
         shape = fit.residual_px[::_STEP, ::_STEP].shape[:2]
+        bounds_shape = (*shape, 2)
         grid = np.ascontiguousarray(field.pixel_grid[::_STEP, ::_STEP]).reshape(-1, 2)
         residual = np.ascontiguousarray(fit.residual_px[::_STEP, ::_STEP]).reshape(-1, 2)
         before = previously = None
-        if carried is not None and carried.shape == shape:
+        if carried is not None and carried.shape == bounds_shape:
             source = field.source_px[::_STEP, ::_STEP] / np.float32(_STEP)
-            before = _moved(carried, source, np.nan).ravel()
+            before = _moved(carried, source, np.nan).reshape(-1, 2)
             if explained is not None:
                 previously = _moved(explained.view(np.uint8), source, 0).ravel() > 0
         fitted = fit_plane_ray(
             fit.homography, grid, residual, tolerance, field.shape, self.focal_share, before
         )
         if fitted is None:
-            self._depth, self._predicted = _grid(before, shape), _grid(previously, shape)
+            self._depth = _grid(before, bounds_shape)
+            self._predicted = _grid(previously, shape)
             return
         ray, inf = fitted
         k, off, length = ray.split(residual, inf)
         on_ray = (off < tolerance) & (length > max(fit.noise_px, 1e-3))
-        self._depth = np.where(on_ray, height(k), np.nan).astype(np.float32).reshape(shape)
+        bounds = height_bounds(k, tolerance / np.maximum(length, 1e-3))
+        self._depth = np.where(on_ray[:, None], bounds, np.nan).reshape(bounds_shape)
         if before is None:
             return
-        self._known = np.isfinite(before)
-        gap = ray.prediction_gap(residual, inf, np.nan_to_num(before))
+        self._known = np.isfinite(before[:, 1])
         near = k * length > tolerance
-        predicted = self._known & (gap < tolerance) & near
+        kept = ray.predicts(residual, inf, np.nan_to_num(before), tolerance)
+        predicted = self._known & near & kept
         self._predicted = predicted.reshape(shape)
         # Predicted on this frame and the last: once is a mover's coincidence.
         self._rigid = predicted & previously if previously is not None else None
