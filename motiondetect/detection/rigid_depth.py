@@ -13,9 +13,10 @@ prediction is as loose as the measurement was
 (:meth:`~motiondetect.constraint_ray.plane_ray.PlaneRay.predicts`).
 
 An object is dropped as rigid when most of its pixels sit in front of the
-plane and were predicted so, within the constraint ray filter's tolerance,
-on this frame and the last (a mover's motion can match one prediction by
-chance: woman.mp4's walker did on the first frame of a fast turn). Only
+plane and were predicted so, within the constraint ray filter's tolerance
+and the carried depth's own error, on this frame and the last (a mover's
+motion can match one prediction by chance: woman.mp4's walker did on the
+first frame of a fast turn). Only
 the near side is judged: a mover the camera follows stays still in the
 image while the background slides by, which is what a point at infinity
 does, so objects between the plane and infinity are never dropped.
@@ -81,8 +82,9 @@ class RigidDepth:
         """Take this frame's fit: test it against the carried depths, keep its own.
 
         ``tolerance`` is the constraint ray filter's (which every flagged
-        object exceeds), px/frame: the largest distance off its ray, and
-        from its prediction, of a rigid point's residual. Through a frame
+        object exceeds), px/frame: the largest error of a rigid point's
+        residual, off its ray and (with the carried depth's error,
+        :meth:`PlaneRay.predicts`) from its prediction. Through a frame
         with no measurable ray the depths are only carried along.
         """
         carried, self._depth = self._depth, None
