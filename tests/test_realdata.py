@@ -139,12 +139,13 @@ def test_fox_with_known_egomotion(tmp_path):
 def test_fox_near_rigid_head_is_dropped_over_time():
     """Without ego-motion: the mounted head, rigid and in front of the wall,
     keeps its depth on the constraint ray, so most of its frames are not
-    reported (measured: 28 regions in 50 frames, against 51 with the test off;
-    33 before each depth carried the bounds it was measured to)."""
+    reported (measured: 25 regions in 50 frames, against 49 with the test off;
+    28 before the animate labels were cleared at cuts, 33 before each depth
+    carried the bounds it was measured to)."""
     counts = []
     for share in (TrackConfig().rigid_share, 0.0):
         detector = MotionDetector("both", TrackConfig(rigid_share=share))
         with open_source(shared_path("fox", "images")) as frames:
             counts.append(sum(len(detector.process(f.image, f.index, 0.0).regions) for f in frames))
-    assert counts[0] <= 32
+    assert counts[0] <= 28
     assert counts[0] <= 0.6 * counts[1]

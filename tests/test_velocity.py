@@ -260,6 +260,31 @@ def test_animate_alone_flags_reversing_movers(period_half, speed):
     assert np.mean(hits) >= 0.7
 
 
+def test_a_cut_clears_the_animate_memory():
+    """The animate label is carried along each frame's motion; across a
+    frame that cannot be judged it is not carried on. Here a mover reverses
+    on frame 5 and then moves smoothly: without a cut its label is still
+    carried three frames later; after a cut it is gone."""
+    clip = _pan_with_mover(waving(4, 10.0), frames=9, pan=1.5)
+    cut = cv2.resize(cv2.cvtColor(data.chelsea(), cv2.COLOR_RGB2BGR), (W, H))
+
+    def animate_on_mover(frames) -> list[bool]:
+        md = MotionDetector("animate", persistence=1)
+        flagged = []
+        for t, (image, mask) in enumerate(frames):
+            out = (md.process(image, t, t / 30).outputs or {}).get("velocity-animate")
+            flagged.append(out is not None and bool(out.mask[mask].any()))
+        return flagged
+
+    steady = animate_on_mover(clip)
+    assert steady[5] and steady[8]  # the reversal, and its label carried since
+    # The cut and the frame after it (a cut back) cannot be judged; frame 7 has
+    # no previous field to test; on frame 8 the mover continues smoothly.
+    cut_clip = [*clip[:6], (cut, np.zeros((H, W), bool)), *clip[6:]]
+    after = animate_on_mover(cut_clip)
+    assert after[5] and not after[-1]
+
+
 def test_animate_leaves_a_smooth_mover_alone():
     clip = _pan_with_mover(lambda t: (60 + 4 * t, 100 + 1.0 * t), frames=24)
     md = MotionDetector("animate", persistence=1)

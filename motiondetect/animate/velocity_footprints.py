@@ -62,7 +62,9 @@ class VelocityAnimateConfig:
     memory_frames : int
         An object that broke its motion stays animate this many frames: the
         label is carried with the object, moved by its velocity, so a limb
-        reversing every few frames is flagged between reversals too.
+        reversing every few frames is flagged between reversals too. A
+        frame that cannot be judged (a cut, motion beyond the band) clears
+        it: the motion that would carry it is unknown there.
     evidence_sigmas : float
         A violation must also show a grey-level change after the plane warp:
         its ``evidence_box`` mean above this many robust sigmas of the
@@ -224,6 +226,10 @@ class VelocityAnimateDetector:
         cfg = self.config
         fit = field.camera if field.camera is not None else fit_camera(field, FitConfig())
         previous, self._previous = self._previous, fit.residual_px
+        if not fit.reliable:
+            # The labels are carried along each frame's motion; a frame that
+            # cannot be judged breaks that chain (as the ray filter's sum).
+            self._memory = None
         if not fit.reliable or previous is None or previous.shape != field.velocity_px.shape:
             return DetectorOutput.empty(field.shape, camera=fit)
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
