@@ -133,6 +133,23 @@ def test_mp4_with_its_index_at_the_end_cut_short(tmp_path, frames):
     assert "Traceback" not in result.output
 
 
+@pytest.mark.parametrize("text_first", [True, False])
+def test_each_unreadable_file_is_named_for_its_own_fault(tmp_path, frames, text_first):
+    """A cut MP4 and a text file named .mp4 both make FFmpeg say "moov atom
+    not found", and FFmpeg does not log the same line twice running: each
+    still gets its own message, in either order."""
+    cut = encode(tmp_path / "cut.mp4", frames)
+    cut.write_bytes(cut.read_bytes()[: cut.stat().st_size // 2])
+    text = tmp_path / "notes.mp4"
+    text.write_text("not a video\n")
+    inputs = [text, cut] if text_first else [cut, text]
+    result = run("detect", *inputs, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 1
+    lines = [line.strip() for line in result.output.splitlines() if line.startswith("  ")]
+    assert f"{text}: not a video FFmpeg can read" in lines
+    assert any(line.startswith(f"{cut}: the MP4 index (moov atom) is missing") for line in lines)
+
+
 def test_av1_is_decoded_or_named(tmp_path, frames):
     encoder = next((c for c in ("libsvtav1", "libaom-av1") if has_encoder(c)), None)
     if encoder is None:

@@ -88,11 +88,30 @@ def _ffmpeg_lines():
         av.logging.set_level(previous)
 
 
-def _explain(name: str, exc: Exception, lines: list) -> str:
-    said = " ".join(str(line[2]).strip() for line in lines[-1:]) or getattr(exc, "strerror", None)
-    said = said or str(exc)
+#: The box types an MP4/MOV file (ISO base media) can start with.
+_MP4_BOXES = (b"ftyp", b"moov", b"mdat", b"free", b"skip", b"wide", b"pnot", b"uuid")
+
+
+def _starts_like_mp4(path: str) -> bool:
+    try:
+        with open(path, "rb") as file:
+            return file.read(8)[4:8] in _MP4_BOXES
+    except OSError:
+        return False
+
+
+def _explain(name: str, exc: Exception, lines: list, path: str | None = None) -> str:
+    """One line for a file FFmpeg could not open. FFmpeg's last error line
+    is read from the capture and from PyAV's exception (FFmpeg does not
+    repeat a line it just logged, so the next input that fails the same way
+    leaves none to capture)."""
+    last = " ".join(str(line[2]).strip() for line in lines[-1:])
+    said = last or getattr(exc, "strerror", None) or str(exc)
+    heard = f"{last} {exc}"
     for words, meaning in _EXPLAINED.items():
-        if words in said:
+        if words in heard:
+            if words == "moov atom not found" and path is not None and not _starts_like_mp4(path):
+                meaning = _EXPLAINED["Invalid data found when processing input"]
             return f"{name}: {meaning}"
     return f"{name}: cannot open: {said}"
 
@@ -120,7 +139,8 @@ def _open_container(location: str | bytes | Path, name: str):
         try:
             container = av.open(target, format=fmt, metadata_errors="replace", **options)
         except av.error.FFmpegError as exc:
-            raise VideoError(_explain(name, exc, lines)) from None
+            path_text = target if isinstance(target, str) and seekable else None
+            raise VideoError(_explain(name, exc, lines, path_text)) from None
         except OSError as exc:
             raise VideoError(f"{name}: cannot read: {exc.strerror or exc}") from None
         except Exception as exc:  # PyAV's own parsing of a damaged header
