@@ -70,14 +70,17 @@ def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
 
 
 def _draw_legend(out: np.ndarray) -> None:
-    """Box colours by detector, bottom left."""
+    """Box colours by detector, on one line at the bottom left (stacked, the
+    three entries covered a third of a small frame's height)."""
     scale = max(0.4, out.shape[1] / 800)
-    step = int(18 * scale / 0.4 * 0.6) + 6
-    y = out.shape[0] - 6
-    for name, colour in reversed(LEGEND):
-        cv2.rectangle(out, (6, y - step + 8), (16, y - 2), colour, -1)
-        _text(out, name, (20, y), colour)
-        y -= step
+    thick = max(1, round(scale * 1.5))
+    swatch = int(round(10 * scale / 0.4))
+    x, y = 6, out.shape[0] - 6
+    for name, colour in LEGEND:
+        cv2.rectangle(out, (x, y - swatch), (x + swatch, y), colour, -1)
+        x += swatch + 4
+        _text(out, name, (x, y), colour)
+        x += cv2.getTextSize(name, _FONT, scale, thick)[0][0] + 3 * swatch // 2
 
 
 def _draw_coarse(out: np.ndarray, result: FrameResult) -> None:
