@@ -247,7 +247,9 @@ def _detect(inputs, config_file, quiet, verbose, print_events, options: dict) ->
 
 
 class _Bars:
-    """Progress bars: one per input (frames) and one for the batch (inputs).
+    """Progress bars: one per input (frames) and one for the batch (inputs),
+    drawn only on a terminal (``disable=None``): redirected to a log file,
+    each bar's redraws would fill it.
 
     A failure is logged as it happens unless ``quiet``; the closing list
     names every failure once more, so ``-q`` prints each exactly once.
@@ -261,7 +263,9 @@ class _Bars:
     def on_start(self, job, expected):
         if self.quiet:
             return None
-        bar = tqdm(desc=str(job.name)[-30:], unit="frame", leave=False, dynamic_ncols=True)
+        bar = tqdm(
+            desc=str(job.name)[-30:], unit="frame", leave=False, dynamic_ncols=True, disable=None
+        )
         self.frame = bar
 
         def progress(done, total):
@@ -273,7 +277,9 @@ class _Bars:
 
     def on_jobs(self, count: int) -> None:
         if count > 1 and not self.quiet:
-            self.overall = tqdm(total=count, desc="inputs", unit="input", dynamic_ncols=True)
+            self.overall = tqdm(
+                total=count, desc="inputs", unit="input", dynamic_ncols=True, disable=None
+            )
 
     def on_done(self, result) -> None:
         if self.frame is not None:

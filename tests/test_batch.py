@@ -193,6 +193,21 @@ def stopped_within(proc, tmp_path, sig, code) -> None:
     assert "Traceback" not in proc.stderr.read()
 
 
+def test_no_progress_bars_in_a_log_file(tmp_path):
+    """Standard error redirected to a file, not a terminal: the bars' redraws
+    stay out of it, and the results are still reported."""
+    log = tmp_path / "log.txt"
+    with log.open("w") as err:
+        proc = subprocess.run(
+            [*EXE, "detect", str(SAMPLE), str(SAMPLE.parent.parent / "uniform_rigid" / "video.mp4"),
+             "-o", str(tmp_path / "o"), "--no-video"],
+            stdout=subprocess.PIPE, stderr=err, text=True, timeout=120,
+        )  # fmt: skip
+    assert proc.returncode == 0
+    assert "frame/s" not in log.read_text() and "\r" not in log.read_text()
+    assert proc.stdout.count(" frames, ") == 2  # one summary line per input
+
+
 def test_ffmpegs_own_lines_stay_out_of_stderr(tmp_path):
     cut = tmp_path / "cut.mp4"
     cut.write_bytes(SAMPLE.read_bytes()[:3000])  # the index is missing
