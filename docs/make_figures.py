@@ -156,12 +156,20 @@ def first_frames(path: Path, count: int, skip: int = 0) -> list[np.ndarray]:
 
 
 def detection_figure(
-    path: Path, at: int, detector: str = "both", egomotion=None, withhold_pixels: bool = False
+    path: Path,
+    at: int,
+    detector: str = "both",
+    egomotion=None,
+    withhold_pixels: bool = False,
+    measure: str = "velocity",
 ) -> np.ndarray:
-    """Frame ``at`` annotated with the detections. With ``withhold_pixels``
-    the footage is replaced by a grey canvas carrying only what the detector
-    saw (its normal flow), for clips whose pixels may not be redistributed."""
-    md = MotionDetector(detector, egomotion=egomotion)
+    """Frame ``at`` annotated with the detections (``measure="normal"``: the
+    paper's path, with its coarse field drawn). With ``withhold_pixels`` the
+    footage is replaced by a grey canvas carrying only what the detector saw,
+    its normal flow (so the normal path), for clips whose pixels may not be
+    redistributed."""
+    measure = "normal" if withhold_pixels else measure
+    md = MotionDetector(detector, egomotion=egomotion, measure=measure)
     with open_source(path) as source:
         for frame in source:
             result = md.process(frame.image, frame.index, frame.time_s)
@@ -225,11 +233,15 @@ def main() -> None:
     cv2.imwrite(str(args.out / "detection_uniform_mixed.png"), detection_figure(clip, 21))
     cv2.imwrite(
         str(args.out / "coarse_field_forward.png"),
-        detection_figure(samples / "forward_crossing" / "video.mp4", 30, "constraint-ray"),
+        detection_figure(
+            samples / "forward_crossing" / "video.mp4", 30, "constraint-ray", measure="normal"
+        ),
     )
     cv2.imwrite(
         str(args.out / "detection_handheld_animate.png"),
-        detection_figure(samples / "handheld_emerging" / "video.mp4", 25, "animate"),
+        detection_figure(
+            samples / "handheld_emerging" / "video.mp4", 25, "animate", measure="normal"
+        ),
     )
     woman = ROOT.parent / "shared" / "data" / "woman" / "woman.mp4"
     if woman.exists():  # a real clip; its pixels are withheld (not ours to redistribute)
