@@ -59,10 +59,16 @@ def draw_boxes(
     return out
 
 
-def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
-    """Readable at any size: outlined, scaled to the frame (320 px wide and up)."""
+def _text_size(out: np.ndarray) -> tuple[float, int]:
+    """Font scale and stroke of the overlay's text, readable at any frame
+    width (320 px and up)."""
     scale = max(0.4, out.shape[1] / 800)
-    thick = max(1, round(scale * 1.5))
+    return scale, max(1, round(scale * 1.5))
+
+
+def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
+    """Outlined, at :func:`_text_size`."""
+    scale, thick = _text_size(out)
     x, y = origin
     for dx, dy in ((-1, -1), (1, -1), (-1, 1), (1, 1)):  # an outline of the same glyph widths
         cv2.putText(out, text, (x + dx, y + dy), _FONT, scale, (0, 0, 0), thick, cv2.LINE_AA)
@@ -72,8 +78,7 @@ def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
 def _draw_legend(out: np.ndarray) -> None:
     """Box colours by detector, on one line at the bottom left (stacked, the
     three entries covered a third of a small frame's height)."""
-    scale = max(0.4, out.shape[1] / 800)
-    thick = max(1, round(scale * 1.5))
+    scale, thick = _text_size(out)
     swatch = int(round(10 * scale / 0.4))
     x, y = 6, out.shape[0] - 6
     for name, colour in LEGEND:
