@@ -313,6 +313,26 @@ def test_tracker_keeps_ids_and_needs_persistence():
     assert [o.track for o in fourth] == [1]
 
 
+def test_a_cut_ends_every_track():
+    """Across a cut nothing is predicted: the mover, seen again after a cut
+    away and back, starts a new track and waits ``persistence`` frames, while
+    a frame that merely cannot be judged is coasted through (above)."""
+    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=12)
+    cut = cv2.resize(cv2.cvtColor(data.chelsea(), cv2.COLOR_RGB2BGR), (W, H))
+    md = MotionDetector("constraint-ray")
+    results = [md.process(image, t, t / 30) for t, (image, _) in enumerate(clip[:6])]
+    before = {r.track for r in results[-1].regions}
+    assert len(before) == 1  # the mover, confirmed
+    md.process(cut, 6, 0.2)
+    back = md.process(clip[6][0], 7, 0.23)
+    assert back.reason == "cut" and not back.regions  # the cut back
+    first = md.process(clip[7][0], 8, 0.27)
+    assert first.reliable and first.regions == []  # a new track, not yet confirmed
+    second = md.process(clip[8][0], 9, 0.3)
+    after = {r.track for r in second.regions}
+    assert len(after) == 1 and after.isdisjoint(before)
+
+
 def test_a_missed_track_is_predicted_as_far_as_it_moved_meanwhile():
     """A mover missed for a few frames is looked for where its velocity has
     carried it since it was last seen, not one frame's motion ahead."""

@@ -341,7 +341,10 @@ class MotionDetector:
             reason = "most of the frame off the fitted motion"
         empty = np.zeros((GRID, GRID), bool)
         if reason:
-            self.tracker.coast()
+            if reason == "cut":  # no track can be predicted across it
+                self.tracker.end()
+            else:
+                self.tracker.coast()
             return FrameResult(
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )

@@ -9,7 +9,9 @@
    track's own image velocity (which includes the camera's motion), it
    overlaps most. Tracks keep a stable integer id.
 3. **Persist.** An object is reported once its track has been seen on
-   ``persistence`` frames; a track survives ``max_missed`` frames unseen.
+   ``persistence`` frames; a track survives ``max_missed`` frames unseen,
+   frames that cannot be judged included, but not a cut: the shot after it
+   starts with no tracks (a box there overlaps one before it only by chance).
 4. **Expect** (optional, ``prior``). Where a confirmed track is predicted,
    the constraint ray needs less evidence to seed.
 """
@@ -321,6 +323,10 @@ class Tracker:
     def reset(self) -> None:
         self._tracks: list[_Track] = []
         self._next_id = 1
+
+    def end(self) -> None:
+        """A cut: every track ends (ids stay unique within the input)."""
+        self._tracks = []
 
     def coast(self) -> None:
         """A frame without judgement: tracks age toward their end, none is matched."""
