@@ -341,10 +341,7 @@ class MotionDetector:
             reason = "most of the frame off the fitted motion"
         empty = np.zeros((GRID, GRID), bool)
         if reason:
-            if reason == "cut":  # no track can be predicted across it
-                self.tracker.end()
-            else:
-                self.tracker.coast()
+            self.tracker.coast(cut=reason == "cut")  # no track is predicted across a cut
             return FrameResult(
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )

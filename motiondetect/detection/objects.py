@@ -324,12 +324,11 @@ class Tracker:
         self._tracks: list[_Track] = []
         self._next_id = 1
 
-    def end(self) -> None:
-        """A cut: every track ends (ids stay unique within the input)."""
-        self._tracks = []
-
-    def coast(self) -> None:
-        """A frame without judgement: tracks age toward their end, none is matched."""
+    def coast(self, cut: bool = False) -> None:
+        """A frame without judgement: tracks age toward their end, none is
+        matched; a ``cut`` ends them all (ids stay unique within the input)."""
+        if cut:
+            self._tracks = []
         for track in self._tracks:
             track.missed += 1
         self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
