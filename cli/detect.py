@@ -295,6 +295,14 @@ class _Bars:
             self.overall.close()
 
 
+def _unreliable(counts: dict) -> str:
+    """ "; 6 frames unreliable (2 cut, 4 heavy blur)", or "" when none."""
+    if not counts:
+        return ""
+    reasons = ", ".join(f"{n} {reason}" for reason, n in counts.items())
+    return f"; {sum(counts.values())} frames unreliable ({reasons})"
+
+
 def _print_summary(result) -> None:
     for r in result.results:
         if r.status == "done":
@@ -303,6 +311,7 @@ def _print_summary(result) -> None:
                 f"{r.job.name}: {s['totals']['frames']} frames, {s['totals']['detections']} "
                 f"detections, {s['totals']['events']} events, {s['speed']['frames_per_s']} fps"
                 + (" (partial input)" if s["status"] == "partial" else "")
+                + _unreliable(s["totals"].get("frames_unreliable", {}))
             )
             for ev in s["events"][:10]:
                 click.echo(

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
+from skimage import data
 
 from motiondetect.detection.base import DETECTOR_SETS
 from motiondetect.io.video import count_decodable_frames
@@ -406,3 +407,32 @@ def test_installed_entry_point_runs(tmp_path, clip):
     check_outputs(tmp_path / "pan", 16, video=False)
     proc = subprocess.run([exe, "detect", "--roi", "x"], capture_output=True, text=True)
     assert proc.returncode == 2
+
+
+def test_the_summary_counts_unreliable_frames_by_reason(tmp_path, clip_frames):
+    """A cut away and back: two frames cannot be judged, and the summary and
+    the printed line say so, by reason (frames.jsonl's)."""
+    h, w = clip_frames[0].shape[:2]
+    other = cv2.resize(cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR), (w, h))
+    folder = tmp_path / "cut"
+    folder.mkdir()
+    for i, image in enumerate([*clip_frames[:8], other, *clip_frames[8:]]):
+        cv2.imwrite(str(folder / f"{i:03d}.png"), image)
+    result = invoke("detect", folder, "-o", tmp_path / "out", "--no-video")
+    assert result.exit_code == 0, result.output
+    summary = check_outputs(tmp_path / "out" / "cut", 17, video=False)
+    counts = summary["totals"]["frames_unreliable"]
+    lines = (tmp_path / "out" / "cut" / "frames.jsonl").read_text().splitlines()
+    records = [json.loads(line) for line in lines]
+    reasons = [r["reason"] for r in records if "reason" in r]
+    assert len(reasons) == sum(counts.values()) == 2
+    assert counts == {reason: reasons.count(reason) for reason in reasons}
+    assert "; 2 frames unreliable (" in result.output
+
+
+def test_a_clean_clip_has_no_unreliable_frames(tmp_path, clip):
+    result = invoke("detect", clip, "-o", tmp_path, "--no-video")
+    assert result.exit_code == 0, result.output
+    summary = check_outputs(tmp_path / "pan", 16, video=False)
+    assert summary["totals"]["frames_unreliable"] == {}
+    assert "unreliable" not in result.output

@@ -7,6 +7,7 @@ input: whatever goes wrong becomes that input's one-line failure.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import json
 import logging
@@ -240,26 +241,31 @@ class _InRange:
 
 def _detect_frames(
     frames: _InRange, writers: _FrameWriters, settings: Settings, progress: Progress | None
-) -> tuple[EventTimeline, int, int]:
-    """The per-frame loop; returns the timeline, the number of detections and
-    the number of frames judged (the others held a result, ``--frame-skip``)."""
+) -> tuple[EventTimeline, dict]:
+    """The per-frame loop; returns the timeline and the totals of the summary
+    that it counts: detections, frames judged (the others held a result,
+    ``--frame-skip``) and judged frames marked unreliable, by reason."""
     source = frames.source
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections, judged = EventTimeline(), 0, 0
+    unreliable: collections.Counter = collections.Counter()
     for frame, result in detector.stream(frames, settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])
         judged += result.held_from is None
+        if result.held_from is None and result.reason:
+            unreliable[result.reason] += 1
         timeline.add(
             result.time_s, result.score, result.moving_fraction,
             record["observer_motion"]["class"], record["detections"], result.index,
         )  # fmt: skip
         if progress is not None:
             progress(len(timeline), info.frame_count)
-    return timeline, detections, judged
+    counted = {"frames_judged": judged, "frames_unreliable": dict(sorted(unreliable.items()))}
+    return timeline, {"detections": detections, **counted}
 
 
 def _second_passes(
@@ -294,7 +300,7 @@ def _process(
     started = time.perf_counter()
     frames = _InRange(source, settings)
     try:
-        timeline, detections, judged = _detect_frames(frames, writers, settings, progress)
+        timeline, counted = _detect_frames(frames, writers, settings, progress)
     except BaseException:
         writers.close(ok=False)
         raise
@@ -314,9 +320,10 @@ def _process(
         )
     totals = {
         "frames": len(timeline),
-        "frames_judged": judged,
+        "frames_judged": counted["frames_judged"],
+        "frames_unreliable": counted["frames_unreliable"],
         "frames_with_detections": int(sum(b is not None for b in timeline.boxes)),
-        "detections": detections,
+        "detections": counted["detections"],
         "events": len(events),
     }
     outputs = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
