@@ -222,21 +222,27 @@ def _cluster_startup_s() -> float:
 
 
 def real_clips(tmp: Path) -> list[Path]:
-    """woman.mp4 and one 854x480 DAVIS clip (re-encoded to MPEG-4), when present."""
+    """woman.mp4 (352x288), one 854x480 DAVIS clip and the fox clip's phone frames
+    (1080x1920), each folder re-encoded to MPEG-4, when present."""
     clips = []
     if (SHARED_DATA / "woman" / "woman.mp4").exists():
         clips.append(SHARED_DATA / "woman" / "woman.mp4")
-    frames = sorted((SHARED_DATA / "davis" / "dog" / "JPEGImages").glob("*.jpg"))
-    if frames:
-        first = cv2.imread(str(frames[0]))
-        h, w = first.shape[:2]
-        path = tmp / "davis_dog.mp4"
-        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (w, h))
-        for f in frames:
-            writer.write(cv2.imread(str(f)))
-        writer.release()
-        clips.append(path)
+    for folder, name in ((SHARED_DATA / "davis" / "dog" / "JPEGImages", "davis_dog.mp4"),
+                         (SHARED_DATA / "fox" / "images", "fox_1080x1920.mp4")):  # fmt: skip
+        frames = sorted(folder.glob("*.jpg"))
+        if frames:
+            clips.append(_encoded(frames, tmp / name))
     return clips
+
+
+def _encoded(frames: list[Path], path: Path) -> Path:
+    """Image files written as one MPEG-4 video at 30 frames/s."""
+    h, w = cv2.imread(str(frames[0])).shape[:2]
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (w, h))
+    for f in frames:
+        writer.write(cv2.imread(str(f)))
+    writer.release()
+    return path
 
 
 def whole_process(cmd: list[str]) -> float:
