@@ -265,7 +265,7 @@ def _detect_frames(
         if progress is not None:
             progress(len(timeline), info.frame_count)
     counted = {"frames_judged": judged, "frames_unreliable": dict(sorted(unreliable.items()))}
-    return timeline, {"detections": detections, **counted}
+    return timeline, {**counted, "detections": detections}
 
 
 def _second_passes(
@@ -320,10 +320,8 @@ def _process(
         )
     totals = {
         "frames": len(timeline),
-        "frames_judged": counted["frames_judged"],
-        "frames_unreliable": counted["frames_unreliable"],
+        **counted,
         "frames_with_detections": int(sum(b is not None for b in timeline.boxes)),
-        "detections": counted["detections"],
         "events": len(events),
     }
     outputs = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
