@@ -315,13 +315,17 @@ class CameraFit:
         }
 
 
+#: The reason of a frame that starts a new shot (nothing carries across it).
+CUT = "cut"
+
+
 def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
     if homography is None or share < config.min_inlier_share:
         return "too few inliers"
     if speed > config.max_speed_px:
         return "motion beyond the band"
     if cut > config.cut_grey:
-        return "cut"
+        return CUT
     if blurred:
         return "heavy blur"
     return ""

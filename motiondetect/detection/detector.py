@@ -25,7 +25,7 @@ from typing import TypeVar
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, FitConfig, fit_camera
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
@@ -341,7 +341,7 @@ class MotionDetector:
             reason = "most of the frame off the fitted motion"
         empty = np.zeros((GRID, GRID), bool)
         if reason:
-            self.tracker.coast(cut=reason == "cut")  # no track is predicted across a cut
+            self.tracker.coast(cut=reason == CUT)  # no track is predicted across a cut
             return FrameResult(
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )

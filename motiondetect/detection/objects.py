@@ -329,6 +329,7 @@ class Tracker:
         matched; a ``cut`` ends them all (ids stay unique within the input)."""
         if cut:
             self._tracks = []
+            return
         for track in self._tracks:
             track.missed += 1
         self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
