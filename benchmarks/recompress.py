@@ -19,8 +19,7 @@ from pathlib import Path
 import av
 import cv2
 import numpy as np
-from common import SHARED_DATA
-from subsample import UCSD_MOVING, numbered
+from subsample import moving_clips, numbered
 
 
 def _through_h264(frames: list[Path], crf: int, tmp: Path) -> list[np.ndarray]:
@@ -58,23 +57,11 @@ def main() -> None:
     args = parser.parse_args()
     if not 0 <= args.crf <= 51:
         parser.error("--crf must be 0-51")
-    clips = [
-        (p, p.parent / "Annotations", "davis") for p in (SHARED_DATA / "davis").glob("*/JPEGImages")
-    ]
-    clips += [
-        (SHARED_DATA / "ucsd" / n / "in", SHARED_DATA / "ucsd" / n / "groundtruth", "ucsd")
-        for n in UCSD_MOVING
-    ]
+    clips = moving_clips()
     with tempfile.TemporaryDirectory() as tmp:
-        for images, truth, group in sorted(clips):
-            if images.is_dir():
-                recompress(
-                    images,
-                    truth,
-                    args.out / group / images.parent.name,
-                    args.crf,
-                    Path(tmp) / "clip.mp4",
-                )
+        for images, truth, group in clips:
+            target = args.out / group / images.parent.name
+            recompress(images, truth, target, args.crf, Path(tmp) / "clip.mp4")
     print(f"{len(clips)} clips through H.264 at CRF {args.crf} in {args.out}")
 
 

@@ -31,6 +31,19 @@ def numbered(folder: Path, suffix: str) -> list[Path]:
     return sorted(folder.glob(f"*{suffix}"), key=last_number)
 
 
+def moving_clips() -> list[tuple[Path, Path, str]]:
+    """(images, ground truth, data set) of each DAVIS clip and of UCSD's
+    moving-camera clips that exist, sorted."""
+    clips = [
+        (p, p.parent / "Annotations", "davis") for p in (SHARED_DATA / "davis").glob("*/JPEGImages")
+    ]
+    clips += [
+        (SHARED_DATA / "ucsd" / n / "in", SHARED_DATA / "ucsd" / n / "groundtruth", "ucsd")
+        for n in UCSD_MOVING
+    ]
+    return sorted(c for c in clips if c[0].is_dir())
+
+
 def subsample_davis(out: Path, step: int) -> int:
     clips = 0
     for images in sorted((SHARED_DATA / "davis").glob("*/JPEGImages")):
