@@ -8,6 +8,14 @@ region is a false alarm) are written into ``OUT`` with
 * ``--exposure A``: a brightness gain of ``1 + A sin(2 pi t / 30)`` on frame
   ``t``, an exposure that drifts by up to ``A`` and changes by up to ``A/5`` a
   frame, as a phone's automatic exposure does when the view moves;
+* ``--distortion K``: a wide-angle lens's barrel distortion, Fitzgibbon's
+  division model ``p_u = p_d / (1 + K r_d^2)`` (``K`` below 0; ``r_d`` in
+  half-diagonals), scaled so that the corners stay the corners; the ground
+  truth masks are warped with the frames (an action camera or a dashcam is
+  about -0.2 to -0.4);
+* ``--overlay``: a dashcam's burnt-in caption, white text outlined in black
+  along the bottom left (a date, a clock that ticks every 30 frames and a
+  speed), fixed to the screen while the view moves;
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -19,6 +27,7 @@ not copied. The frames never leave this machine::
 from __future__ import annotations
 
 import argparse
+import functools
 from pathlib import Path
 
 import cv2
@@ -27,27 +36,76 @@ from common import SHARED_DATA
 from subsample import moving_clips, numbered
 
 
-def degraded(image: np.ndarray, t: int, noise: float, exposure: float, rng) -> np.ndarray:
-    """Frame ``t`` (uint8) with the exposure drift and the sensor noise applied."""
-    out = image.astype(np.float32) * np.float32(1.0 + exposure * np.sin(2 * np.pi * t / 30))
+@functools.lru_cache(maxsize=4)
+def barrel_maps(width: int, height: int, k: float) -> tuple[np.ndarray, np.ndarray]:
+    """``cv2.remap`` maps that give an image as a lens with division-model
+    distortion ``k`` would record it: each recorded pixel ``p_d`` shows the
+    scene at ``c + (1 + k) (p_d - c) / (1 + k r_d^2)``."""
+    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
+    cx, cy = (width - 1) / 2, (height - 1) / 2
+    half_diagonal = np.hypot(cx, cy)
+    r2 = ((xs - cx) ** 2 + (ys - cy) ** 2) / half_diagonal**2
+    scale = (1.0 + k) / (1.0 + k * r2)
+    return (cx + (xs - cx) * scale).astype(np.float32), (cy + (ys - cy) * scale).astype(np.float32)
+
+
+def _lens(image: np.ndarray, k: float, nearest: bool = False) -> np.ndarray:
+    if k == 0:
+        return image
+    map_x, map_y = barrel_maps(image.shape[1], image.shape[0], k)
+    interpolation = cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR
+    return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REFLECT)
+
+
+def caption(image: np.ndarray, t: int) -> np.ndarray:
+    """``image`` with a dashcam's caption burnt in (its clock ticks every 30 frames)."""
+    h, w = image.shape[:2]
+    text = f"2026/11/26 14:03:{10 + t // 30:02d}  52 km/h"
+    scale = h / 600
+    origin = (int(0.03 * w), int(0.95 * h))
+    out = image.copy()
+    for colour, thick in (((0, 0, 0), 6), ((255, 255, 255), 2)):
+        width = max(1, round(thick * scale))
+        cv2.putText(out, text, origin, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, width, cv2.LINE_AA)
+    return out
+
+
+def degraded(
+    image: np.ndarray, t: int, noise: float, exposure: float, rng, distortion: float = 0.0,
+    overlay: bool = False,
+) -> np.ndarray:  # fmt: skip
+    """Frame ``t`` (uint8) through the lens, with the exposure drift and the
+    sensor noise applied, and the caption burnt in last."""
+    gain = np.float32(1.0 + exposure * np.sin(2 * np.pi * t / 30))
+    out = _lens(image, distortion).astype(np.float32) * gain
     if noise > 0:
         out += rng.normal(0.0, noise, image.shape).astype(np.float32)
-    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+    out = np.clip(np.rint(out), 0, 255).astype(np.uint8)
+    return caption(out, t) if overlay else out
 
 
-def degrade(frames: list[Path], target: Path, noise: float, exposure: float, seed: int) -> None:
+def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: int) -> None:
     """Write each of ``frames`` degraded into ``target``, under its own name."""
     rng = np.random.default_rng(seed)
     target.mkdir(parents=True, exist_ok=True)
     for t, path in enumerate(frames):
-        image = degraded(cv2.imread(str(path)), t, noise, exposure, rng)
+        image = cv2.imread(str(path))
+        image = degraded(image, t, args.noise, args.exposure, rng, args.distortion, args.overlay)
         cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
 
-def _link(source: Path, target: Path) -> None:
-    if not target.exists():
-        target.parent.mkdir(parents=True, exist_ok=True)
+def _truth(source: Path, target: Path, distortion: float) -> None:
+    """The ground truth: linked, or its masks warped through the lens."""
+    if target.exists():
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    if distortion == 0 or not source.is_dir():
         target.symlink_to(source.resolve())
+        return
+    target.mkdir()
+    for mask in sorted(source.glob("*.png")):
+        image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
+        cv2.imwrite(str(target / mask.name), _lens(image, distortion, nearest=True))
 
 
 def main() -> None:
@@ -55,18 +113,20 @@ def main() -> None:
     parser.add_argument("out", type=Path)
     parser.add_argument("--noise", type=float, default=0.0, help="grey levels (sigma)")
     parser.add_argument("--exposure", type=float, default=0.0, help="gain amplitude, 0-1")
+    parser.add_argument("--distortion", type=float, default=0.0, help="division model, -0.5-0")
+    parser.add_argument("--overlay", action="store_true", help="a dashcam's burnt-in caption")
     args = parser.parse_args()
-    if args.noise < 0 or not 0 <= args.exposure < 1:
-        parser.error("--noise must be at least 0 and --exposure within [0, 1)")
+    if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
+        parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")
     clips = [(im, truth, args.out / group / im.parent.name) for im, truth, group in moving_clips()]
     fox = SHARED_DATA / "fox"
     if (fox / "images").is_dir():
         clips.append((fox / "images", fox / "transforms.json", args.out / "fox"))
     for seed, (images, truth, target) in enumerate(clips):
         frames = numbered(images, ".jpg") or numbered(images, ".png")
-        degrade(frames, target / images.name, args.noise, args.exposure, seed)
-        _link(truth, target / truth.name)
-    print(f"{len(clips)} clips, noise {args.noise}, exposure {args.exposure}, in {args.out}")
+        degrade(frames, target / images.name, args, seed)
+        _truth(truth, target / truth.name, args.distortion)
+    print(f"{len(clips)} clips written into {args.out}")
 
 
 if __name__ == "__main__":

@@ -18,9 +18,7 @@ import collections
 import contextlib
 import dataclasses
 from collections.abc import Iterable, Iterator
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -29,17 +27,19 @@ from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, FitConfig, fi
 from motiondetect.constraint_ray.hough import CoarseField
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
+from motiondetect.detection import streaming
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.detection.rigid_depth import RigidDepth
+from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
+from motiondetect.detection.streaming import F
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.stages import GRID
 
-F = TypeVar("F")
 _GROW = np.ones((3, 3), np.uint8)
 _CHANGE_BOX = 3  # px averaged when testing an image change for object support
 
@@ -98,43 +98,6 @@ class FrameResult:
         """Flagged pixels at input size, (height, width) uint8 0/255."""
         flagged = self.flagged_pixels.astype(np.uint8) * 255
         return cv2.resize(flagged, (width, height), interpolation=cv2.INTER_NEAREST_EXACT)
-
-
-def _judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:
-    """(the skipped frames before a frame to judge, that frame): every
-    ``every``-th frame is judged, from the first; the last group's frame is
-    None when the input ends on skipped frames."""
-    held: list[F] = []
-    for n, frame in enumerate(frames):
-        if n % every:
-            held.append(frame)
-        else:
-            yield held, frame
-            held = []
-    if held:
-        yield held, None
-
-
-def _measured(group: tuple, measure) -> tuple:
-    """``(held, frame, measure(frame.image))`` for one of :func:`_judged_groups`."""
-    held, frame = group
-    return held, frame, (None if frame is None else measure(frame.image))
-
-
-def _measured_ahead(groups: Iterable[tuple], measure) -> Iterator[tuple]:
-    """:func:`_measured` per group, each group read and measured on a second
-    thread while the one before is used."""
-    items = iter(groups)
-
-    def read_and_measure():
-        got = next(items, None)
-        return None if got is None else _measured(got, measure)
-
-    with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
-        pending = ahead.submit(read_and_measure)
-        while (got := pending.result()) is not None:
-            pending = ahead.submit(read_and_measure)
-            yield got
 
 
 def fuse(
@@ -227,6 +190,7 @@ class MotionDetector:
         self._rigid = RigidDepth(share, self.fit_config.focal_share)
         self.tracker = Tracker(track)
         self._history = ChangeHistory(track.support_frames)
+        self._overlay = ScreenFixed(track.overlay_frames)
         rate = track.background_rate
         self._background = BackgroundMemory(rate, track.background_frames) if rate > 0 else None
         if measure == "velocity":
@@ -247,6 +211,7 @@ class MotionDetector:
         self._sharpness.clear()
         self._history.reset()
         self._rigid.reset()
+        self._overlay.reset()
         if self._background is not None:
             self._background.reset()
 
@@ -273,11 +238,11 @@ class MotionDetector:
             raise ValueError(f"frame_skip must be at least 0, but got {frame_skip}")
         if frame_skip and self.egomotion is not None:
             raise ValueError("frame_skip cannot be used with known ego-motion (frame to frame)")
-        groups = _judged_groups(frames, frame_skip + 1)
+        groups = streaming.judged_groups(frames, frame_skip + 1)
         if cv2.getNumThreads() <= 1:
-            measured = (_measured(group, self.measure_frame) for group in groups)
+            measured = (streaming.measured(group, self.measure_frame) for group in groups)
         else:
-            measured = _measured_ahead(groups, self.measure_frame)
+            measured = streaming.measured_ahead(groups, self.measure_frame)
         last = None
         # Closed on any exit, so that the reading thread has stopped before an
         # error here leaves the caller to close the source it reads.
@@ -331,6 +296,9 @@ class MotionDetector:
         self._history.update(flow, fit)
         self._rigid.update(flow, fit, self.ray_config.tolerance(fit.noise_px, fit.spread_px))
         track = self.tracker.config
+        overlay = self._overlay.update(flow, fit)
+        if overlay is not None and union.any():
+            union = without_overlay(union, overlay, flow.patch_px)
         unlike = self._remembered(flow, fit, union)
         objects = group_objects(union, flow.velocity_px, track, self._support(fit, union), unlike)
         objects = assigned_objects(objects, flow, fit, track.layer_sigmas, track.min_area_share)

@@ -102,6 +102,10 @@ class TrackConfig:
         ray from the last frame, and this share of those lies in front of
         the dominant plane where that depth predicts it
         (:mod:`.rigid_depth`; 0: off).
+    overlay_frames : int
+        Content fixed to the screen while the camera's motion changes the
+        image under it, for this many frames, is an overlay (a burnt-in
+        caption or logo) and is not flagged (:mod:`.screen_fixed`; 0: off).
     """
 
     gap_px: int = 10
@@ -119,6 +123,7 @@ class TrackConfig:
     layer_sigmas: float = 3.0
     prior: bool = False
     rigid_share: float = 0.5
+    overlay_frames: int = 30
 
     def __post_init__(self) -> None:
         check_fields(
@@ -138,6 +143,7 @@ class TrackConfig:
                 "trim_share",
                 "layer_sigmas",
                 "rigid_share",
+                "overlay_frames",
             ),
         )
         for name in ("background_rate", "trim_share", "rigid_share"):

@@ -1,0 +1,129 @@
+"""Content fixed to the screen while the camera moves: burnt-in captions and logos.
+
+A dashcam's date and clock, a drone's telemetry, a broadcaster's logo or a
+stock-footage watermark stay on the same pixels while the view behind them
+moves. Where the fitted camera motion moves the scene, such content has a
+velocity of zero, so it lies off every constraint ray and is flagged on
+every frame, and one event then spans the whole video.
+
+No point of a rigid world seen by a moving camera keeps its image where the
+camera's motion changes the image; an overlay does, on every frame. Each
+work pixel keeps the grey level it showed when it last changed (its
+reference) and a score:
+
+* **+1** on a frame where the fitted plane predicts a change there (the
+  plane difference, ``|I_t - H(I_{t-1})|``, beyond :data:`EVIDENCE_SIGMAS`
+  of the frame's difference noise) and the pixel still shows its reference
+  (within :data:`STILL_SIGMAS`);
+* **-**:data:`CHANGE_PENALTY` on a frame where it does not show its
+  reference, which then becomes the grey level it shows;
+* unchanged otherwise (a still camera, or plain texture that no motion
+  would change, is no evidence either way).
+
+The score is kept within ``[0, 2 * frames]``. Pixels whose score has reached
+``frames`` are fixed to the screen; their connected groups of at least
+:data:`MIN_PIXELS` (text strokes, a logo, not a speck of noise) make the
+overlay. The reference is not moved along with small changes, so a mover
+that the camera follows drifts or deforms away from it and keeps a low
+score; a clock's digit changes once a second and costs only
+:data:`CHANGE_PENALTY` of a score that grows by one a frame.
+
+Blind spot: a mover the camera keeps on the same pixels, unchanged in
+look, for ``frames`` frames of a moving view is screen-fixed by any
+measure, and is taken out as an overlay would be
+(``tests/test_screen_fixed.py``). The default, 30 frames (1 s at 30 fps),
+is long for a camera to follow a mover to the pixel; docs/detectors.md
+measures it.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motiondetect.constraint_ray.camera_fit import CameraFit
+from motiondetect.detection.regions import components
+from motiondetect.measurement.dense_flow import VelocityField
+
+#: Plane difference, in difference-noise sigmas, beyond which the camera's
+#: motion predicts a change at a pixel (the same 5 sigmas as the ray's tolerance).
+EVIDENCE_SIGMAS = 5.0
+#: Distance from the reference, in difference-noise sigmas, within which a
+#: pixel still shows it (an overlay's pixels change by sensor noise only).
+STILL_SIGMAS = 2.0
+#: Score lost on a frame where a pixel changes.
+CHANGE_PENALTY = 5
+#: Smallest group of fixed pixels that counts as an overlay, work px.
+MIN_PIXELS = 10
+
+
+class ScreenFixed:
+    """Finds content fixed to the screen over the frames (:meth:`update`).
+
+    State: each work pixel's reference grey level and score, kept across
+    unreliable frames (an overlay outlasts a cut) and cleared by a change
+    of size.
+
+    Parameters
+    ----------
+    frames : int
+        Frames of evidence that make a pixel fixed (0: off).
+    """
+
+    def __init__(self, frames: int) -> None:
+        self.frames = frames
+        self.reset()
+
+    def reset(self) -> None:
+        self._reference: np.ndarray | None = None  # (h, w) uint8
+        self._score: np.ndarray | None = None  # (h, w) int16
+
+    def update(self, field: VelocityField, fit: CameraFit) -> np.ndarray | None:
+        """Score this frame and return the overlay, (h, w) bool work pixels;
+        None while nothing is fixed (or when off)."""
+        if self.frames <= 0:
+            return None
+        grey = field.grey
+        if self._reference is None or self._reference.shape != grey.shape:
+            self._reference = field.previous_grey.copy()
+            self._score = np.zeros(grey.shape, np.int16)
+        if not fit.reliable or fit.plane_difference is None:
+            return self._overlay()
+        sigma = fit.difference_sigma()
+        still = cv2.absdiff(grey, self._reference) <= STILL_SIGMAS * sigma
+        evidence = still & (fit.plane_difference > EVIDENCE_SIGMAS * sigma)
+        score = self._score
+        score[evidence] += 1
+        score[~still] -= CHANGE_PENALTY
+        np.clip(score, 0, 2 * self.frames, out=score)
+        np.copyto(self._reference, grey, where=~still)
+        return self._overlay()
+
+    def _overlay(self) -> np.ndarray | None:
+        fixed = self._score >= self.frames
+        if not fixed.any():
+            return None
+        count, labels = components(fixed)
+        sizes = np.bincount(labels.ravel(), minlength=count)
+        keep = sizes >= MIN_PIXELS
+        keep[0] = False
+        return keep.take(labels) if keep.any() else None
+
+
+def without_overlay(flagged: np.ndarray, overlay: np.ndarray, radius_px: int) -> np.ndarray:
+    """``flagged`` with the overlay's flags taken out, (h, w) bool, a new array.
+
+    The flow within ``radius_px`` of an overlay mixes its zero velocity
+    with the scene's (DIS's patches straddle it), so that band is cleared;
+    and a flagged group lying mostly in the band is the overlay's too (its
+    fringe, where the mixed flow spread further), so it goes whole. A mover
+    crossing the band keeps what lies outside it.
+    """
+    size = 2 * radius_px + 1
+    band = cv2.dilate(overlay.view(np.uint8), np.ones((size, size), np.uint8)) > 0
+    count, labels = components(flagged)
+    inside = np.bincount(labels[band], minlength=count)
+    total = np.bincount(labels.ravel(), minlength=count)
+    drop = 2 * inside >= total
+    drop[0] = True  # the background stays unflagged
+    return ~drop.take(labels) & ~band

@@ -1,0 +1,47 @@
+"""Frames to judge, with the frames skipped before them, measured in order
+or one ahead on a second thread (:meth:`.detector.MotionDetector.stream`)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+F = TypeVar("F")
+
+
+def judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:
+    """(the skipped frames before a frame to judge, that frame): every
+    ``every``-th frame is judged, from the first; the last group's frame is
+    None when the input ends on skipped frames."""
+    held: list[F] = []
+    for n, frame in enumerate(frames):
+        if n % every:
+            held.append(frame)
+        else:
+            yield held, frame
+            held = []
+    if held:
+        yield held, None
+
+
+def measured(group: tuple, measure) -> tuple:
+    """``(held, frame, measure(frame.image))`` for one of :func:`judged_groups`."""
+    held, frame = group
+    return held, frame, (None if frame is None else measure(frame.image))
+
+
+def measured_ahead(groups: Iterable[tuple], measure) -> Iterator[tuple]:
+    """:func:`measured` per group, each group read and measured on a second
+    thread while the one before is used."""
+    items = iter(groups)
+
+    def read_and_measure():
+        got = next(items, None)
+        return None if got is None else measured(got, measure)
+
+    with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
+        pending = ahead.submit(read_and_measure)
+        while (got := pending.result()) is not None:
+            pending = ahead.submit(read_and_measure)
+            yield got
