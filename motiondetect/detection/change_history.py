@@ -22,7 +22,11 @@ import numpy as np
 from motiondetect.constraint_ray.camera_fit import CameraFit
 from motiondetect.detection.regions import components
 from motiondetect.measurement.dense_flow import VelocityField
-from motiondetect.measurement.image_change import chained_difference, difference_noise
+from motiondetect.measurement.image_change import (
+    chained_difference,
+    difference_noise,
+    matched_exposure,
+)
 
 
 class ChangeHistory:
@@ -122,6 +126,8 @@ class BackgroundMemory:
         background is unknown, (h, w) bool; None while under a tenth of the
         frame is known (too little to measure the difference's noise on).
 
+        The memory is first brought to this frame's exposure
+        (:func:`~motiondetect.measurement.image_change.matched_exposure`).
         The ``box``-px mean of ``|grey - memory|`` is compared with
         ``sigmas`` robust sigmas of that difference over the known places.
         Call once per frame, before :meth:`learn`.
@@ -145,6 +151,7 @@ class BackgroundMemory:
         known = self._looks >= self.frames
         if known.sum() < known.size // 10:
             return None
+        self._memory = matched_exposure(self._memory, self._grey)
         difference = np.minimum(cv2.absdiff(self._memory, self._grey), 255).astype(np.uint8)
         noise = difference_noise(difference, known)
         return (cv2.blur(difference, (box, box)) > sigmas * noise) | ~known

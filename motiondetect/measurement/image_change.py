@@ -6,6 +6,13 @@ current working frame against the previous one warped by the fitted
 dominant plane; the chained difference reaches further back through the
 product of several frames' planes, so a slow mover, which changes the
 image by less than the noise in one frame, shows over several.
+
+A camera's automatic exposure changes the brightness of the whole frame
+by a few per cent a frame as the view moves. Over one frame that is within
+the difference's noise; over several it adds up on every pixel, so the
+comparisons that reach back several frames (the chained difference, the
+remembered background) first match the older image's exposure to the
+current one (:func:`matched_exposure`).
 """
 
 from __future__ import annotations
@@ -17,6 +24,41 @@ from motiondetect.measurement.dense_flow import VelocityField
 
 #: Gaussian 1-D noise: median |x| = sigma / 1.4826.
 _ABS_MEDIAN_TO_SIGMA = 1.4826
+#: Grey levels trusted for the exposure ratio: neither near black (where
+#: noise and the sensor's offset dominate) nor near clipping.
+_MID_TONES = (16, 240)
+#: Exposure ratios closer to 1 than this are left alone (under one grey
+#: level at mid-grey).
+_SAME_EXPOSURE = 0.005
+
+
+def matched_exposure(older: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """``older`` scaled to ``current``'s exposure, same shape and dtype.
+
+    The exposure ratio is the median of ``current / older`` over the
+    mid-tone pixels of every second row and column: the two images are
+    registered (warped by the fitted planes), so most pixels show the same
+    scene and the median ignores the movers and the pixels that entered the
+    view. ``older`` is returned as it is when the ratio is within 0.5 % of 1.
+
+    Parameters
+    ----------
+    older : (h, w) ndarray of uint8 or float32
+        Grey levels, registered to ``current``.
+    current : (h, w) ndarray of uint8 or float32
+    """
+    a = older[::2, ::2].astype(np.float32)
+    b = current[::2, ::2].astype(np.float32)
+    low, high = _MID_TONES
+    usable = (a > low) & (a < high) & (b > low) & (b < high)
+    if usable.sum() < 100:
+        return older
+    gain = float(np.median(b[usable] / a[usable]))
+    if abs(gain - 1.0) < _SAME_EXPOSURE:
+        return older
+    if older.dtype == np.uint8:
+        return cv2.convertScaleAbs(older, alpha=gain)
+    return older * np.float32(gain)
 
 
 def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray:
@@ -30,7 +72,8 @@ def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray
 def chained_difference(
     oldest: np.ndarray, homographies: list[np.ndarray], grey: np.ndarray
 ) -> np.ndarray:
-    """``|grey - oldest warped by the chained planes|``, (h, w) uint8 grey levels.
+    """``|grey - oldest warped by the chained planes|``, (h, w) uint8 grey
+    levels, at matched exposure.
 
     Parameters
     ----------
@@ -47,7 +90,7 @@ def chained_difference(
         chain = chain @ homography
     h, w = grey.shape
     warped = cv2.warpPerspective(oldest, chain, (w, h), flags=cv2.WARP_INVERSE_MAP)
-    return cv2.absdiff(warped, grey)
+    return cv2.absdiff(matched_exposure(warped, grey), grey)
 
 
 def difference_noise(difference: np.ndarray, where: np.ndarray | None = None) -> float:
