@@ -76,7 +76,7 @@ class ScreenFixed:
 
     def reset(self) -> None:
         self._reference: np.ndarray | None = None  # (h, w) uint8
-        self._score: np.ndarray | None = None  # (h, w) int16
+        self._score: np.ndarray | None = None  # (h, w) int32: any ``frames`` fits
 
     def update(self, field: VelocityField, fit: CameraFit) -> np.ndarray | None:
         """Score this frame and return the overlay, (h, w) bool work pixels;
@@ -86,7 +86,7 @@ class ScreenFixed:
         grey = field.grey
         if self._reference is None or self._reference.shape != grey.shape:
             self._reference = field.previous_grey.copy()
-            self._score = np.zeros(grey.shape, np.int16)
+            self._score = np.zeros(grey.shape, np.int32)
         if not fit.reliable or fit.plane_difference is None:
             return self._overlay()
         sigma = fit.difference_sigma()
