@@ -5,6 +5,8 @@ stock-footage watermark stay on the same pixels while the view behind them
 moves. Where the fitted camera motion moves the scene, such content has a
 velocity of zero, so it lies off every constraint ray and is flagged on
 every frame, and one event then spans the whole video.
+So does whatever the camera is mounted on and sees: a car's bonnet, a
+bicycle's handlebars, a drone's landing gear, a train's window frame.
 
 No point of a rigid world seen by a moving camera keeps its image where the
 camera's motion changes the image; an overlay does, on every frame. Each
