@@ -304,6 +304,11 @@ def _unreliable(counts: dict) -> str:
     return f"; {sum(counts.values())} frames unreliable ({reasons})"
 
 
+def _overlay(frames: int) -> str:
+    """The printed line's note of a burnt-in caption or logo left unflagged."""
+    return f"; a caption or logo fixed to the screen left out on {frames} frames" if frames else ""
+
+
 def _print_summary(result) -> None:
     for r in result.results:
         if r.status == "done":
@@ -313,6 +318,7 @@ def _print_summary(result) -> None:
                 f"detections, {s['totals']['events']} events, {s['speed']['frames_per_s']} fps"
                 + (" (partial input)" if s["status"] == "partial" else "")
                 + _unreliable(s["totals"].get("frames_unreliable", {}))
+                + _overlay(s["totals"].get("frames_overlay", 0))
             )
             for ev in s["events"][:10]:
                 click.echo(

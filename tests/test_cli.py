@@ -435,4 +435,27 @@ def test_a_clean_clip_has_no_unreliable_frames(tmp_path, clip):
     assert result.exit_code == 0, result.output
     summary = check_outputs(tmp_path / "pan", 16, video=False)
     assert summary["totals"]["frames_unreliable"] == {}
-    assert "unreliable" not in result.output
+    assert summary["totals"]["frames_overlay"] == 0  # nothing on this pan is screen-fixed
+    assert "unreliable" not in result.output and "caption" not in result.output
+
+
+def test_the_summary_counts_the_frames_with_a_caption_left_out(tmp_path, clip_frames):
+    """A caption burnt into the pan, found after 5 frames of evidence (set
+    in a config file): the summary counts the frames it was left out on,
+    and the printed line says so."""
+    folder = tmp_path / "captioned"
+    folder.mkdir()
+    for i, image in enumerate(clip_frames):
+        image = image.copy()
+        cv2.putText(image, "2026/11/26 14:03:10", (6, image.shape[0] - 8),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 2)  # fmt: skip
+        cv2.imwrite(str(folder / f"{i:03d}.png"), image)
+    config = tmp_path / "md.toml"
+    config.write_text("[track]\noverlay_frames = 5\n")
+    result = invoke("detect", folder, "-o", tmp_path / "out", "--no-video", "--config", config)
+    assert result.exit_code == 0, result.output
+    summary = check_outputs(tmp_path / "out" / "captioned", 16, video=False)
+    frames = summary["totals"]["frames_overlay"]
+    # 15 judged frames, less the 4 before the 5th frame of evidence (measured: 11)
+    assert 8 <= frames <= 11
+    assert f"left out on {frames} frames" in result.output

@@ -244,13 +244,15 @@ def _detect_frames(
 ) -> tuple[EventTimeline, dict]:
     """The per-frame loop; returns the timeline and the totals of the summary
     that it counts: detections, frames judged (the others held a result,
-    ``--frame-skip``) and judged frames marked unreliable, by reason."""
+    ``--frame-skip``), judged frames marked unreliable, by reason, and judged
+    frames on which an overlay (a burnt-in caption or logo) was not flagged."""
     source = frames.source
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections, judged = EventTimeline(), 0, 0
     unreliable: collections.Counter = collections.Counter()
+    overlaid = 0
     for frame, result in detector.stream(frames, settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
@@ -258,13 +260,18 @@ def _detect_frames(
         judged += result.held_from is None
         if result.held_from is None and result.reason:
             unreliable[result.reason] += 1
+        overlaid += result.held_from is None and result.overlay is not None
         timeline.add(
             result.time_s, result.score, result.moving_fraction,
             record["observer_motion"]["class"], record["detections"], result.index,
         )  # fmt: skip
         if progress is not None:
             progress(len(timeline), info.frame_count)
-    counted = {"frames_judged": judged, "frames_unreliable": dict(sorted(unreliable.items()))}
+    counted = {
+        "frames_judged": judged,
+        "frames_unreliable": dict(sorted(unreliable.items())),
+        "frames_overlay": overlaid,
+    }
     return timeline, {**counted, "detections": detections}
 
 

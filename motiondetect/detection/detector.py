@@ -48,7 +48,9 @@ _CHANGE_BOX = 3  # px averaged when testing an image change for object support
 class FrameResult:
     """Everything reported for one frame.
 
-    ``mask`` (work pixels) is set on the velocity path; ``reason`` says why
+    ``mask`` (work pixels) is set on the velocity path, and ``overlay``
+    (work pixels) where content fixed to the screen, a burnt-in caption or
+    logo, was found and not flagged (:mod:`.screen_fixed`); ``reason`` says why
     a frame could not be judged (then nothing is flagged on it);
     ``held_from`` is set on a frame skipped by ``frame_skip``
     (:meth:`MotionDetector.stream`): the index of the judged frame whose
@@ -67,6 +69,7 @@ class FrameResult:
     camera: CameraFit | None = None
     reason: str = ""
     held_from: int | None = None
+    overlay: np.ndarray | None = None
 
     def held(self, index: int, time_s: float) -> FrameResult:
         """This result carried to a later, skipped frame."""
@@ -320,8 +323,9 @@ class MotionDetector:
             mask |= obj.mask
         flagged = regions_mask(regions) if regions else empty
         return FrameResult(
-            index, time_s, regions, flagged, known, None, flow, outputs, mask=mask, camera=camera
-        )
+            index, time_s, regions, flagged, known, None, flow, outputs,
+            mask=mask, camera=camera, overlay=overlay,
+        )  # fmt: skip
 
     def _support(self, fit: CameraFit, flagged: np.ndarray) -> np.ndarray | None:
         """Where the image changed once the camera's motion is undone: over one

@@ -20,7 +20,8 @@ reference) and a score:
 * **-**:data:`CHANGE_PENALTY` on a frame where it does not show its
   reference, which then becomes the grey level it shows;
 * unchanged otherwise (a still camera, or plain texture that no motion
-  would change, is no evidence either way).
+  would change, is no evidence either way; nor is the band along the frame
+  edge where content enters, which the detectors do not test).
 
 The score is kept within ``[0, 2 * frames]``. Pixels whose score has reached
 ``frames`` are fixed to the screen; their connected groups of at least
@@ -44,7 +45,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
-from motiondetect.detection.regions import components
+from motiondetect.detection.regions import components, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField
 
 #: Plane difference, in difference-noise sigmas, beyond which the camera's
@@ -94,6 +95,9 @@ class ScreenFixed:
         sigma = fit.difference_sigma()
         changed = cv2.absdiff(grey, self._reference) > STILL_SIGMAS * sigma
         evidence = ~changed & (fit.plane_difference > EVIDENCE_SIGMAS * sigma)
+        # Where content enters, the plane difference compares with nothing
+        # seen; the detectors do not test there either.
+        evidence = without_frame_edge(evidence, fit.edge_band_px)
         score = self._score  # whole-array arithmetic: masks would cost 20x more
         score += evidence.view(np.uint8)
         score -= changed.view(np.uint8) * np.uint8(CHANGE_PENALTY)
