@@ -24,3 +24,17 @@ def test_the_legend_is_one_line_along_the_bottom(size):
     assert rows.max() - rows.min() < h / 8
     # The three entries side by side, within the frame.
     assert np.nonzero(drawn[rows.min() :].any(axis=0))[0].max() < w - 1
+
+
+def test_a_caption_left_out_is_outlined_and_nothing_else_is_drawn_for_it():
+    w, h = 320, 240
+    grey = np.full((h, w, 3), 40, np.uint8)
+    overlay = np.zeros((120, 160), bool)  # work pixels, half the input size
+    overlay[100:104, 20:80] = True
+    plain = FrameResult(0, 0.0, [], np.zeros((64, 64), bool), None, None, None)
+    marked = FrameResult(0, 0.0, [], np.zeros((64, 64), bool), None, None, None, overlay=overlay)
+    changed = np.any(annotate(grey, marked, (w, h)) != annotate(grey, plain, (w, h)), axis=2)
+    ys, xs = np.nonzero(changed)
+    assert ys.size and ys.min() >= 196 and ys.max() <= 212  # around rows 200-207
+    assert xs.min() >= 36 and xs.max() <= 164  # around columns 40-159
+    assert not changed[203, 60]  # an outline, the caption itself left as it is

@@ -1,4 +1,5 @@
-"""Annotated frames: boxes, flagged cells, observer class and the coarse field.
+"""Annotated frames: boxes, flagged cells, observer class, the coarse field
+and, outlined in grey, any caption or logo left out as fixed to the screen.
 
 Kept apart from detection (DVR-Scan's overlays): one ``annotate`` call per
 frame draws a :class:`~motiondetect.detection.detector.FrameResult` onto an image.
@@ -14,6 +15,7 @@ from motiondetect.detection.detector import FrameResult
 from motiondetect.io.colours import CLASS_COLOURS, DETECTOR_COLOURS, LEGEND
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
+_LEFT_OUT = (160, 160, 160)  # the outline of a caption or logo left out
 
 
 def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
@@ -33,6 +35,7 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         tint = out.copy()
         tint[overlay > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
+    _draw_overlay(out, result.overlay)
     draw_boxes(out, [r.to_json() for r in result.regions], sx, sy)
     _draw_coarse(out, result)
     if not result.reliable:
@@ -57,6 +60,18 @@ def draw_boxes(
         label = f"#{det['track']} " if "track" in det else ""
         _text(out, f"{label}{det['score']:.2f}", (p0[0] + 2, p0[1] + 14), colour)
     return out
+
+
+def _draw_overlay(out: np.ndarray, overlay: np.ndarray | None) -> None:
+    """Outline, in grey, content fixed to the screen that was left out (a
+    burnt-in caption or logo; work pixels, ``FrameResult.overlay``)."""
+    if overlay is None:
+        return
+    h, w = out.shape[:2]
+    mask = cv2.resize(overlay.view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST)
+    mask = cv2.dilate(mask, np.ones((5, 5), np.uint8))
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(out, contours, -1, _LEFT_OUT, 1, cv2.LINE_AA)
 
 
 def _text_size(out: np.ndarray) -> tuple[float, int]:
