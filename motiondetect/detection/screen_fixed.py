@@ -80,6 +80,8 @@ class ScreenFixed:
     def reset(self) -> None:
         self._reference: np.ndarray | None = None  # (h, w) uint8
         self._score: np.ndarray | None = None  # (h, w) int32: any ``frames`` fits
+        self._fixed: np.ndarray | None = None  # (h, w) bool: what _overlay was made of
+        self._overlay: np.ndarray | None = None  # remade only when _fixed changes
 
     def update(self, field: VelocityField, fit: CameraFit) -> np.ndarray | None:
         """Score this frame and return the overlay, (h, w) bool work pixels;
@@ -90,8 +92,9 @@ class ScreenFixed:
         if self._reference is None or self._reference.shape != grey.shape:
             self._reference = field.previous_grey.copy()
             self._score = np.zeros(grey.shape, np.int32)
+            self._fixed = self._overlay = None
         if not fit.reliable or fit.plane_difference is None:
-            return self._overlay()
+            return self._overlay
         sigma = fit.difference_sigma()
         changed = cv2.absdiff(grey, self._reference) > STILL_SIGMAS * sigma
         evidence = ~changed & (fit.plane_difference > EVIDENCE_SIGMAS * sigma)
@@ -103,17 +106,22 @@ class ScreenFixed:
         score -= changed.view(np.uint8) * np.uint8(CHANGE_PENALTY)
         np.clip(score, 0, 2 * self.frames, out=score)
         np.copyto(self._reference, grey, where=changed)
-        return self._overlay()
+        fixed = score >= self.frames
+        if self._fixed is None or not np.array_equal(fixed, self._fixed):
+            self._fixed, self._overlay = fixed, _groups(fixed)  # else unchanged: kept
+        return self._overlay
 
-    def _overlay(self) -> np.ndarray | None:
-        fixed = self._score >= self.frames
-        if not fixed.any():
-            return None
-        count, labels = components(fixed)
-        sizes = np.bincount(labels.ravel(), minlength=count)
-        keep = sizes >= MIN_PIXELS
-        keep[0] = False
-        return keep.take(labels) if keep.any() else None
+
+def _groups(fixed: np.ndarray) -> np.ndarray | None:
+    """The connected groups of ``fixed`` pixels of at least :data:`MIN_PIXELS`,
+    (h, w) bool; None when there are none."""
+    if not fixed.any():
+        return None
+    count, labels = components(fixed)
+    sizes = np.bincount(labels.ravel(), minlength=count)
+    keep = sizes >= MIN_PIXELS
+    keep[0] = False
+    return keep.take(labels) if keep.any() else None
 
 
 def without_overlay(flagged: np.ndarray, overlay: np.ndarray, radius_px: int) -> np.ndarray:

@@ -31,9 +31,9 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
     )
     sx, sy = size[0] / w0, size[1] / h0
     if result.flagged_pixels.any():
-        overlay = result.input_mask(*size)
+        flagged = result.input_mask(*size)
         tint = out.copy()
-        tint[overlay > 0] = (0, 0, 255)
+        tint[flagged > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
     _draw_overlay(out, result.overlay)
     draw_boxes(out, [r.to_json() for r in result.regions], sx, sy)
