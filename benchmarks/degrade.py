@@ -16,6 +16,10 @@ region is a false alarm) are written into ``OUT`` with
 * ``--overlay``: a dashcam's burnt-in caption, white text outlined in black
   along the bottom left (a date, a clock that ticks every 30 frames and a
   speed), fixed to the screen while the view moves;
+* ``--letterbox F`` and ``--pillarbox F``: black bars above and below (each
+  ``F`` of the height) or left and right (each ``F`` of the width), as a
+  film in a 16:9 frame or a 4:3 or upright phone clip posted at 16:9 shows;
+  the ground truth masks get the same bars, marked static;
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -70,17 +74,25 @@ def caption(image: np.ndarray, t: int) -> np.ndarray:
     return out
 
 
+def bars(image: np.ndarray, letterbox: float, pillarbox: float) -> np.ndarray:
+    """``image`` with black bars: ``letterbox`` of its height above and below,
+    ``pillarbox`` of its width left and right."""
+    h, w = image.shape[:2]
+    dy, dx = round(letterbox * h), round(pillarbox * w)
+    return cv2.copyMakeBorder(image, dy, dy, dx, dx, cv2.BORDER_CONSTANT, value=0)
+
+
 def degraded(
     image: np.ndarray, t: int, noise: float, exposure: float, rng, distortion: float = 0.0,
-    overlay: bool = False,
+    overlay: bool = False, letterbox: float = 0.0, pillarbox: float = 0.0,
 ) -> np.ndarray:  # fmt: skip
     """Frame ``t`` (uint8) through the lens, with the exposure drift and the
-    sensor noise applied, and the caption burnt in last."""
+    sensor noise applied, the bars added and the caption burnt in last."""
     gain = np.float32(1.0 + exposure * np.sin(2 * np.pi * t / 30))
     out = _lens(image, distortion).astype(np.float32) * gain
     if noise > 0:
         out += rng.normal(0.0, noise, image.shape).astype(np.float32)
-    out = np.clip(np.rint(out), 0, 255).astype(np.uint8)
+    out = bars(np.clip(np.rint(out), 0, 255).astype(np.uint8), letterbox, pillarbox)
     return caption(out, t) if overlay else out
 
 
@@ -90,22 +102,27 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
     target.mkdir(parents=True, exist_ok=True)
     for t, path in enumerate(frames):
         image = cv2.imread(str(path))
-        image = degraded(image, t, args.noise, args.exposure, rng, args.distortion, args.overlay)
+        image = degraded(
+            image, t, args.noise, args.exposure, rng, args.distortion, args.overlay,
+            args.letterbox, args.pillarbox,
+        )  # fmt: skip
         cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
 
-def _truth(source: Path, target: Path, distortion: float) -> None:
-    """The ground truth: linked, or its masks warped through the lens."""
+def _truth(source: Path, target: Path, args: argparse.Namespace) -> None:
+    """The ground truth: linked, or its masks warped through the lens and
+    given the frames' bars."""
     if target.exists():
         return
     target.parent.mkdir(parents=True, exist_ok=True)
-    if distortion == 0 or not source.is_dir():
+    changed = args.distortion != 0 or args.letterbox > 0 or args.pillarbox > 0
+    if not changed or not source.is_dir():
         target.symlink_to(source.resolve())
         return
     target.mkdir()
     for mask in sorted(source.glob("*.png")):
-        image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
-        cv2.imwrite(str(target / mask.name), _lens(image, distortion, nearest=True))
+        image = _lens(cv2.imread(str(mask), cv2.IMREAD_UNCHANGED), args.distortion, nearest=True)
+        cv2.imwrite(str(target / mask.name), bars(image, args.letterbox, args.pillarbox))
 
 
 def main() -> None:
@@ -115,9 +132,13 @@ def main() -> None:
     parser.add_argument("--exposure", type=float, default=0.0, help="gain amplitude, 0-1")
     parser.add_argument("--distortion", type=float, default=0.0, help="division model, -0.5-0")
     parser.add_argument("--overlay", action="store_true", help="a dashcam's burnt-in caption")
+    parser.add_argument("--letterbox", type=float, default=0.0, help="bar height, 0-0.5")
+    parser.add_argument("--pillarbox", type=float, default=0.0, help="bar width, 0-0.5")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
         parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")
+    if not (0 <= args.letterbox <= 0.5 and 0 <= args.pillarbox <= 0.5):
+        parser.error("--letterbox and --pillarbox must be in [0, 0.5]")
     clips = [(im, truth, args.out / group / im.parent.name) for im, truth, group in moving_clips()]
     fox = SHARED_DATA / "fox"
     if (fox / "images").is_dir():
@@ -125,7 +146,7 @@ def main() -> None:
     for seed, (images, truth, target) in enumerate(clips):
         frames = numbered(images, ".jpg") or numbered(images, ".png")
         degrade(frames, target / images.name, args, seed)
-        _truth(truth, target / truth.name, args.distortion)
+        _truth(truth, target / truth.name, args)
     print(f"{len(clips)} clips written into {args.out}")
 
 

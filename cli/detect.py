@@ -61,7 +61,10 @@ def _d(key: str) -> str:
 @click.option(
     "--work-size",
     type=int,
-    help=f"Long side of the working resolution, px, never above the input's {_d('work_size')}.",
+    help=(
+        "Long side of the working resolution (of the picture inside any black bars), px, "
+        f"never above the input's {_d('work_size')}."
+    ),
 )
 @click.option(
     "--flow-preset",
@@ -309,6 +312,14 @@ def _overlay(frames: int) -> str:
     return f"; a caption or logo fixed to the screen left out on {frames} frames" if frames else ""
 
 
+def _picture(box: list[int] | None) -> str:
+    """The printed line's note of black bars left out."""
+    if not box:
+        return ""
+    x, y, w, h = box
+    return f"; black bars left out, picture {w}x{h} at ({x}, {y})"
+
+
 def _print_summary(result) -> None:
     for r in result.results:
         if r.status == "done":
@@ -319,6 +330,7 @@ def _print_summary(result) -> None:
                 + (" (partial input)" if s["status"] == "partial" else "")
                 + _unreliable(s["totals"].get("frames_unreliable", {}))
                 + _overlay(s["totals"].get("frames_overlay", 0))
+                + _picture(s["totals"].get("picture"))
             )
             for ev in s["events"][:10]:
                 click.echo(

@@ -459,3 +459,30 @@ def test_the_summary_counts_the_frames_with_a_caption_left_out(tmp_path, clip_fr
     # 15 judged frames, less the 4 before the 5th frame of evidence (measured: 11)
     assert 8 <= frames <= 11
     assert f"left out on {frames} frames" in result.output
+
+
+def test_a_letterboxed_input_is_measured_inside_its_bars(tmp_path, clip_frames):
+    """Black bars above and below the pan: the summary gives the picture
+    measured, the printed line says so, and every box and mask lies in the
+    picture (the bars hold nothing that moves)."""
+    folder = tmp_path / "letterboxed"
+    folder.mkdir()
+    bar = 30
+    for i, image in enumerate(clip_frames):
+        boxed = cv2.copyMakeBorder(image, bar, bar, 0, 0, cv2.BORDER_CONSTANT, value=0)
+        cv2.imwrite(str(folder / f"{i:03d}.png"), boxed)
+    height, width = clip_frames[0].shape[:2]
+    result = invoke("detect", folder, "-o", tmp_path / "out", "--no-video", "--masks")
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "out" / "letterboxed"
+    summary = check_outputs(out, 16, video=False)
+    assert summary["totals"]["picture"] == [0, bar, width, height]
+    assert summary["totals"]["detections"] > 0
+    assert f"black bars left out, picture {width}x{height} at (0, {bar})" in result.output
+    for line in (out / "frames.jsonl").read_text().splitlines():
+        for det in json.loads(line)["detections"]:
+            x, y, w, h = det["bbox"]
+            assert bar <= y and y + h <= bar + height
+    for path in (out / "masks").glob("*.png"):
+        mask = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        assert not mask[:bar].any() and not mask[-bar:].any()

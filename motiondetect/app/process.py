@@ -244,15 +244,16 @@ def _detect_frames(
 ) -> tuple[EventTimeline, dict]:
     """The per-frame loop; returns the timeline and the totals of the summary
     that it counts: detections, frames judged (the others held a result,
-    ``--frame-skip``), judged frames marked unreliable, by reason, and judged
-    frames on which an overlay (a burnt-in caption or logo) was not flagged."""
+    ``--frame-skip``), judged frames marked unreliable, by reason, judged
+    frames on which an overlay (a burnt-in caption or logo) was not flagged,
+    and the picture inside black bars the last judged frame was measured on."""
     source = frames.source
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections, judged = EventTimeline(), 0, 0
     unreliable: collections.Counter = collections.Counter()
-    overlaid = 0
+    overlaid, picture = 0, None
     for frame, result in detector.stream(frames, settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
@@ -261,6 +262,8 @@ def _detect_frames(
         if result.held_from is None and result.reason:
             unreliable[result.reason] += 1
         overlaid += result.held_from is None and result.overlay is not None
+        if result.held_from is None and result.field is not None:
+            picture = getattr(result.field, "picture", None)
         timeline.add(
             result.time_s, result.score, result.moving_fraction,
             record["observer_motion"]["class"], record["detections"], result.index,
@@ -272,6 +275,8 @@ def _detect_frames(
         "frames_unreliable": dict(sorted(unreliable.items())),
         "frames_overlay": overlaid,
     }
+    if picture is not None:
+        counted["picture"] = list(picture.box)
     return timeline, {**counted, "detections": detections}
 
 

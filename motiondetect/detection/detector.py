@@ -30,6 +30,7 @@ from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection import streaming
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
+from motiondetect.detection.framing import Framing
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
@@ -38,6 +39,7 @@ from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
 from motiondetect.detection.streaming import F
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
+from motiondetect.measurement.picture import Picture
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
@@ -197,16 +199,25 @@ class MotionDetector:
         rate = track.background_rate
         self._background = BackgroundMemory(rate, track.background_frames) if rate > 0 else None
         if measure == "velocity":
-            self.pipeline = DenseFlow(by_type.get(DenseFlowConfig))
+            flow_config = by_type.get(DenseFlowConfig, DenseFlowConfig())
+            if egomotion is not None:  # known poses describe the whole recorded frame
+                flow_config = dataclasses.replace(flow_config, bar_limit=0)
+            self.pipeline = DenseFlow(flow_config)
         else:
             self.pipeline = NormalFlowPipeline(by_type.get(StageConfig))
         self._epipole: np.ndarray | None = None
         self._recent: list[np.ndarray] = []
         self._sharpness: collections.deque = collections.deque(maxlen=self.fit_config.blur_history)
+        self._picture: Picture | None = None
 
     def reset(self) -> None:
         """Start afresh (a new input, or after a gap in the frames)."""
         self.pipeline.reset()
+        self._reset_judging()
+
+    def _reset_judging(self) -> None:
+        """Forget what :meth:`judge` keeps (not the measurement's state,
+        which the measuring thread owns)."""
         self.tracker.reset()
         for det in self.detectors.values():
             det.reset()
@@ -283,6 +294,9 @@ class MotionDetector:
         return FrameResult(index, time_s, regions, flagged, observer, coarse, flow, outputs)
 
     def _velocity_frame(self, flow: VelocityField, index: int, time_s: float) -> FrameResult:
+        if flow.picture != self._picture:  # black bars found or lit: other work pixels
+            self._reset_judging()
+            self._picture = flow.picture
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         fit = fit_camera(flow, self.fit_config, self._epipole, reference)
         self._sharpness.append(fit.sharpness)
@@ -321,6 +335,11 @@ class MotionDetector:
         mask = np.zeros(flow.shape, bool)
         for obj in confirmed:
             mask |= obj.mask
+        if flow.picture is not None:
+            framing = Framing(flow.picture, flow.geometry)
+            regions, mask, overlay = framing.placed(
+                regions, [o.mask for o in confirmed], mask, overlay
+            )
         flagged = regions_mask(regions) if regions else empty
         return FrameResult(
             index, time_s, regions, flagged, known, None, flow, outputs,

@@ -25,6 +25,7 @@ from motiondetect.config_checks import check_fields
 from motiondetect.measurement import stages
 from motiondetect.measurement.aperture import structure_tensor
 from motiondetect.measurement.normal_flow import GridGeometry
+from motiondetect.measurement.picture import BAR_LIMIT, Picture, PictureArea
 
 _REMAP_COLUMNS = 4096  # points per row when remapping a list of points
 
@@ -64,6 +65,11 @@ class DenseFlowConfig:
         (:func:`confirmed_both_ways`); "off" skips it. "ultrafast" costs
         about 1 ms a frame at 320 px and caught as many of DIS's errors as
         "fast" (docs/detectors.md).
+    bar_limit : int
+        Grey level (of 255) at or below which a band along a frame edge that
+        has stayed dark is a black bar, left out of the measurement
+        (:mod:`~motiondetect.measurement.picture`; FFmpeg cropdetect's 24);
+        0 measures the whole frame.
     """
 
     work_size: int = 320
@@ -72,11 +78,13 @@ class DenseFlowConfig:
     patch_stride: int = 4
     refinement_iterations: int | None = None
     check_preset: Literal["ultrafast", "fast", "medium", "off"] = "ultrafast"
+    bar_limit: int = BAR_LIMIT
 
     def __post_init__(self) -> None:
         check_fields(
             self,
             positive=("work_size", "patch_stride"),
+            non_negative=("bar_limit",),
             choices={"preset": tuple(PRESETS), "check_preset": (*PRESETS, "off")},
         )
         if self.descent_iterations is not None:
@@ -115,6 +123,10 @@ class VelocityField:
         The flow measured the other way, from the previous frame to this
         one, at previous-frame pixels, for :meth:`confirmed_at`; None: no
         check.
+    picture : Picture, optional
+        The part of the frame measured, when it has black bars
+        (:mod:`~motiondetect.measurement.picture`); ``geometry.input_size``
+        is then the picture's size. None: the whole frame.
     """
 
     velocity_px: np.ndarray
@@ -126,6 +138,7 @@ class VelocityField:
     tracked: np.ndarray | None = None
     patch_px: int = 8
     forward_px: np.ndarray | None = None
+    picture: Picture | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -261,12 +274,16 @@ class DenseFlow:
         check = self.config.check_preset
         self._check = None if check == "off" else cv2.DISOpticalFlow_create(PRESETS[check])
         self._previous: np.ndarray | None = None
+        self._pictures = PictureArea(self.config.bar_limit) if self.config.bar_limit > 0 else None
+        self._picture: Picture | None = None
         self._geometry: GridGeometry | None = None
         self._grid: np.ndarray | None = None
 
     def reset(self) -> None:
-        """Forget the delayed frame."""
+        """Forget the delayed frame, and the picture area."""
         self._previous = None
+        if self._pictures is not None:
+            self._pictures.reset()
 
     def geometry_for(self, width: int, height: int) -> GridGeometry:
         work = stages.working_size(width, height, min(self.config.work_size, max(width, height)))
@@ -275,6 +292,10 @@ class DenseFlow:
     def process(self, frame: np.ndarray) -> VelocityField | None:
         """Measure the velocity between the previous frame and ``frame``.
 
+        Only the picture inside black bars is measured, when the frame has
+        them (:attr:`VelocityField.picture`; ``bar_limit`` 0: the whole
+        frame); a change of picture starts afresh, like a change of size.
+
         Parameters
         ----------
         frame : (H, W) or (H, W, C) ndarray of uint8 or uint16
@@ -282,9 +303,14 @@ class DenseFlow:
         Returns
         -------
         VelocityField or None
-            None for the first frame.
+            None for the first frame (of this size and picture).
         """
         stages.validate_frame(frame)
+        picture = None if self._pictures is None else self._pictures.update(frame)
+        if picture != self._picture:
+            self._picture, self._previous = picture, None
+        if picture is not None:
+            frame = picture.crop(frame)
         h, w = frame.shape[:2]
         if self._geometry is None or self._geometry.input_size != (w, h):
             self._geometry = self.geometry_for(w, h)
@@ -299,5 +325,5 @@ class DenseFlow:
         forward = None if self._check is None else self._check.calc(previous, grey, None)
         return VelocityField(
             velocity, grey, previous, self._geometry, self._grid,
-            patch_px=self._patch_px, forward_px=forward,
+            patch_px=self._patch_px, forward_px=forward, picture=picture,
         )  # fmt: skip

@@ -1,0 +1,93 @@
+"""Letterboxed and pillarboxed video: only the picture inside the black bars is measured."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.measurement.dense_flow import DenseFlowConfig
+from motiondetect.measurement.picture import BLEED_PX, PictureArea, content_bounds
+
+from .test_velocity import H, W, _pan_with_mover, background
+
+BAR = 40  # px: each pillarbox bar around the 320x240 synthetic frames
+
+
+def _pillarboxed(image: np.ndarray) -> np.ndarray:
+    return cv2.copyMakeBorder(image, 0, 0, BAR, BAR, cv2.BORDER_CONSTANT, value=0)
+
+
+def test_content_bounds_are_the_box_of_everything_above_the_limit():
+    frame = np.zeros((100, 200, 3), np.uint8)
+    frame[10:90, 30:170] = 25  # just above cropdetect's 24
+    frame[50, 20, 2] = 200  # one bright red pixel widens the box
+    assert content_bounds(frame) == (20, 10, 170, 90)
+    frame[10:90, 30:170] = 24
+    frame[50, 20] = 0
+    assert content_bounds(frame) is None  # dark throughout
+    deep = np.zeros((100, 200), np.uint16)
+    deep[5:95, 40:160] = 25 * 257  # 16-bit frames: the same limit, scaled
+    assert content_bounds(deep) == (40, 5, 160, 95)
+
+
+def test_the_picture_is_found_after_dark_frames_and_opens_where_a_bar_lights():
+    area = PictureArea()
+    dark = np.zeros((240, 400, 3), np.uint8)
+    assert area.update(dark) is None  # a fade from black: nothing known yet
+    frame = _pillarboxed(background(0.0))
+    assert area.update(frame).box == (BAR, 0, W, H)
+    bleed = frame.copy()
+    bleed[:, BAR - BLEED_PX : BAR] = 120  # a codec's ringing next to the picture
+    assert area.update(bleed).box == (BAR, 0, W, H)
+    lit = frame.copy()
+    lit[100:110, 5:15] = 200  # content well inside the left bar
+    assert area.update(lit).box == (0, 0, W + BAR, H)
+    lit[100:110, -15:-5] = 200
+    assert area.update(lit) is None  # no bar left: the whole frame, for good
+    assert area.update(frame) is None
+
+
+def test_a_thin_dark_edge_is_no_bar():
+    """An encoder's dark column (under 1 % of the side) is left to the
+    frame-edge band; the picture is the whole frame."""
+    frame = background(0.0)
+    frame[:, :2] = 0
+    assert PictureArea().update(frame) is None
+
+
+def test_a_pillarboxed_pan_gives_the_unboxed_results_in_place():
+    """The picture of a pillarboxed pan is the unboxed clip, so every mask
+    and box is the unboxed clip's, moved by the bar's width, and nothing is
+    flagged in the bars. Measuring the whole frame instead (``bar_limit``
+    0), the picture's edges, where content enters the view, are flagged
+    on every frame (measured: 2-3 regions)."""
+    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=20)
+    plain = MotionDetector("both")
+    boxed = MotionDetector("both")
+    whole = MotionDetector("both", DenseFlowConfig(bar_limit=0))
+    at_edges, found = [], []
+    for t, (image, _) in enumerate(clip):
+        expected = plain.process(image, t, 0.0)
+        wide = _pillarboxed(image)
+        got = boxed.process(wide, t, 0.0)
+        mask = got.input_mask(W + 2 * BAR, H)
+        assert np.array_equal(mask[:, BAR:-BAR], expected.input_mask(W, H))
+        assert not mask[:, :BAR].any() and not mask[:, -BAR:].any()
+        shifted = [[x + BAR, y, w, h] for x, y, w, h in (r.bbox for r in expected.regions)]
+        assert [r.bbox for r in got.regions] == shifted
+        found.append(bool(shifted))
+        edges = (r.bbox for r in whole.process(wide, t, 0.0).regions)
+        at_edges.append(sum(x < BAR + 12 or x + w > W + BAR - 12 for x, _, w, _ in edges))
+    assert all(found[3:])  # the mover, on every frame once warm
+    assert min(at_edges[3:]) >= 1
+
+
+def test_known_ego_motion_measures_the_whole_frame():
+    """Known poses describe the whole recorded frame, so bars are not cut
+    off under ``--egomotion``; without it they are."""
+    frames = [_pillarboxed(background(2.0 * t)) for t in range(2)]
+    for egomotion, size in ((None, (W, H)), (lambda i, g: None, (W + 2 * BAR, H))):
+        md = MotionDetector("both", egomotion=egomotion)
+        md.measure_frame(frames[0])
+        assert md.measure_frame(frames[1]).geometry.input_size == size
