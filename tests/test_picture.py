@@ -91,3 +91,17 @@ def test_known_ego_motion_measures_the_whole_frame():
         md = MotionDetector("both", egomotion=egomotion)
         md.measure_frame(frames[0])
         assert md.measure_frame(frames[1]).geometry.input_size == size
+
+
+def test_a_dark_band_on_one_side_only_is_no_bar():
+    """A night sky above a lit road is dark along the top alone: bars come
+    in pairs of one thickness, so the frame is measured whole."""
+    frame = background(0.0)
+    frame[:50] = 0
+    assert PictureArea().update(frame) is None
+    frame[-50 + BLEED_PX + 1 :] = (
+        0  # a bar below, thinner than the one above by more than the bleed
+    )
+    assert PictureArea().update(frame) is None
+    frame[-50:] = 0
+    assert PictureArea().update(frame).box == (0, 50, W, H - 100)

@@ -9,7 +9,8 @@ back in the whole frame (:mod:`motiondetect.detection.framing`).
 
 A bar is a band along a frame edge in which no pixel has ever been brighter
 than ``limit`` grey levels (FFmpeg's ``cropdetect`` uses the same limit,
-24 of 255), beyond the codec's bleed next to the picture. The picture only
+24 of 255), beyond the codec's bleed next to the picture; bars come in
+pairs of one thickness, the picture centred between them. The picture only
 grows: once content shows in a bar, that side of the frame is picture for
 the rest of the input.
 """
@@ -111,7 +112,7 @@ class PictureArea:
             found = content_bounds(frame, self.limit)
             if found is None:
                 return None
-            self._bounds = _without_thin_bars(found, w, h)
+            self._bounds = _bars_kept(found, w, h)
         else:
             self._bounds = self._lit_bars_opened(frame)
         x0, y0, x1, y1 = self._bounds
@@ -137,14 +138,22 @@ class PictureArea:
         return x0, y0, x1, y1
 
 
-def _without_thin_bars(bounds, width: int, height: int) -> tuple[int, int, int, int]:
-    """``bounds`` with every dark band thinner than ``MIN_BAR_SHARE`` of its
-    side given to the picture (an encoder's dark edge column is no bar)."""
+def _bars_kept(bounds, width: int, height: int) -> tuple[int, int, int, int]:
+    """``bounds`` with the dark bands that are no bars given to the picture.
+
+    Bars come in pairs of one thickness, the picture centred between them
+    (top and bottom, or left and right, within :data:`BLEED_PX`), each at
+    least ``MIN_BAR_SHARE`` of its side: a night sky above a lit road, or an
+    encoder's dark edge column, is no bar.
+    """
     x0, y0, x1, y1 = bounds
-    min_x, min_y = MIN_BAR_SHARE * width, MIN_BAR_SHARE * height
-    return (
-        0 if x0 < min_x else x0,
-        0 if y0 < min_y else y0,
-        width if width - x1 < min_x else x1,
-        height if height - y1 < min_y else y1,
-    )
+    x0, x1 = _pair(x0, width - x1, width)
+    y0, y1 = _pair(y0, height - y1, height)
+    return x0, y0, width - x1, height - y1
+
+
+def _pair(before: int, after: int, side: int) -> tuple[int, int]:
+    """Two dark bands' thicknesses kept as bars, or both 0."""
+    if min(before, after) < MIN_BAR_SHARE * side or abs(before - after) > BLEED_PX:
+        return 0, 0
+    return before, after
