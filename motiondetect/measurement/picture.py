@@ -69,13 +69,12 @@ def content_bounds(frame: np.ndarray, limit: int = BAR_LIMIT) -> tuple[int, int,
         Input pixels, end exclusive; None when the frame is dark throughout.
     """
     level = _level(frame, limit)
-    bright = frame > level
-    if bright.ndim == 3:
-        bright = bright.any(axis=2)
-    rows = np.flatnonzero(bright.any(axis=1))
+    h, w = frame.shape[:2]
+    flat = np.ascontiguousarray(frame).reshape(h, -1)  # channels side by side in each row
+    rows = np.flatnonzero(flat.max(axis=1) > level)
     if rows.size == 0:
         return None
-    cols = np.flatnonzero(bright.any(axis=0))
+    cols = np.flatnonzero(flat.max(axis=0).reshape(w, -1).max(axis=1) > level)
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
 
 
