@@ -312,6 +312,11 @@ def _overlay(frames: int) -> str:
     return f"; a caption or logo fixed to the screen left out on {frames} frames" if frames else ""
 
 
+def _repeated(frames: int) -> str:
+    """The printed line's note of frames that repeated the one before."""
+    return f"; {frames} frames repeated the one before (their results held)" if frames else ""
+
+
 def _picture(box: list[int] | None) -> str:
     """The printed line's note of black bars left out."""
     if not box:
@@ -330,6 +335,7 @@ def _print_summary(result) -> None:
                 + (" (partial input)" if s["status"] == "partial" else "")
                 + _unreliable(s["totals"].get("frames_unreliable", {}))
                 + _overlay(s["totals"].get("frames_overlay", 0))
+                + _repeated(s["totals"].get("frames_repeated", 0))
                 + _picture(s["totals"].get("picture"))
             )
             for ev in s["events"][:10]:

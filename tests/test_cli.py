@@ -486,3 +486,27 @@ def test_a_letterboxed_input_is_measured_inside_its_bars(tmp_path, clip_frames):
     for path in (out / "masks").glob("*.png"):
         mask = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
         assert not mask[:bar].any() and not mask[-bar:].any()
+
+
+def test_repeated_frames_are_counted_and_carry_the_last_result(tmp_path, clip_frames):
+    """The pan with every 4th frame shown twice: the summary counts the 4
+    repeats, the printed line says so, and each repeat's record carries the
+    frame before's detections, marked."""
+    folder = tmp_path / "repeated"
+    folder.mkdir()
+    shown = [image for i, image in enumerate(clip_frames) for _ in range(2 if i % 4 == 3 else 1)]
+    for i, image in enumerate(shown):
+        cv2.imwrite(str(folder / f"{i:03d}.png"), image)
+    result = invoke("detect", folder, "-o", tmp_path / "out", "--no-video")
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "out" / "repeated"
+    summary = check_outputs(out, 20, video=False)
+    assert summary["totals"]["frames_repeated"] == 4
+    assert summary["totals"]["frames_judged"] == 16
+    assert "4 frames repeated the one before" in result.output
+    records = [json.loads(line) for line in (out / "frames.jsonl").read_text().splitlines()]
+    repeats = [r for r in records if r.get("repeat")]
+    assert [r["frame"] for r in repeats] == [4, 9, 14, 19]
+    for r in repeats:
+        assert r["held_from"] == r["frame"] - 1
+        assert r["detections"] == records[r["frame"] - 1]["detections"]

@@ -246,14 +246,15 @@ def _detect_frames(
     that it counts: detections, frames judged (the others held a result,
     ``--frame-skip``), judged frames marked unreliable, by reason, judged
     frames on which an overlay (a burnt-in caption or logo) was not flagged,
-    and the picture inside black bars the last judged frame was measured on."""
+    frames that repeated the one before (held its result), and the picture
+    inside black bars the last judged frame was measured on."""
     source = frames.source
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
     timeline, detections, judged = EventTimeline(), 0, 0
     unreliable: collections.Counter = collections.Counter()
-    overlaid, picture = 0, None
+    overlaid, repeated, picture = 0, 0, None
     for frame, result in detector.stream(frames, settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
@@ -262,6 +263,7 @@ def _detect_frames(
         if result.held_from is None and result.reason:
             unreliable[result.reason] += 1
         overlaid += result.held_from is None and result.overlay is not None
+        repeated += result.repeat
         if result.held_from is None and result.field is not None:
             picture = getattr(result.field, "picture", None)
         timeline.add(
@@ -274,6 +276,7 @@ def _detect_frames(
         "frames_judged": judged,
         "frames_unreliable": dict(sorted(unreliable.items())),
         "frames_overlay": overlaid,
+        "frames_repeated": repeated,
     }
     if picture is not None:
         counted["picture"] = list(picture.box)

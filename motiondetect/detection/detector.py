@@ -18,18 +18,16 @@ import collections
 import contextlib
 import dataclasses
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, FitConfig, fit_camera
-from motiondetect.constraint_ray.hough import CoarseField
-from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection import streaming
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
+from motiondetect.detection.frame_result import FrameResult
 from motiondetect.detection.framing import Framing
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
@@ -40,69 +38,11 @@ from motiondetect.detection.streaming import F
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.picture import Picture
+from motiondetect.measurement.repeats import REPEAT
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
 _CHANGE_BOX = 3  # px averaged when testing an image change for object support
-
-
-@dataclass(frozen=True)
-class FrameResult:
-    """Everything reported for one frame.
-
-    ``mask`` (work pixels) is set on the velocity path, and ``overlay``
-    (work pixels) where content fixed to the screen, a burnt-in caption or
-    logo, was found and not flagged (:mod:`.screen_fixed`); ``reason`` says why
-    a frame could not be judged (then nothing is flagged on it);
-    ``held_from`` is set on a frame skipped by ``frame_skip``
-    (:meth:`MotionDetector.stream`): the index of the judged frame whose
-    result it carries.
-    """
-
-    index: int
-    time_s: float
-    regions: list[Region]
-    flagged: np.ndarray  # (64, 64) bool, union of the detectors
-    observer: ObserverMotion | None
-    coarse: CoarseField | None
-    field: object | None
-    outputs: dict[str, DetectorOutput] = field(default_factory=dict)
-    mask: np.ndarray | None = None
-    camera: CameraFit | None = None
-    reason: str = ""
-    held_from: int | None = None
-    overlay: np.ndarray | None = None
-
-    def held(self, index: int, time_s: float) -> FrameResult:
-        """This result carried to a later, skipped frame."""
-        return dataclasses.replace(self, index=index, time_s=time_s, held_from=self.index)
-
-    @property
-    def moving_fraction(self) -> float:
-        return float(self.flagged_pixels.mean())
-
-    @property
-    def flagged_pixels(self) -> np.ndarray:
-        """What is flagged, (h, w) bool: ``mask`` in work pixels on the
-        velocity path, else the (64, 64) ``flagged`` grid."""
-        return self.mask if self.mask is not None else self.flagged
-
-    @property
-    def score(self) -> float:
-        return max((r.score for r in self.regions), default=0.0)
-
-    @property
-    def warm_up(self) -> bool:
-        return self.field is None
-
-    @property
-    def reliable(self) -> bool:
-        return not self.reason
-
-    def input_mask(self, width: int, height: int) -> np.ndarray:
-        """Flagged pixels at input size, (height, width) uint8 0/255."""
-        flagged = self.flagged_pixels.astype(np.uint8) * 255
-        return cv2.resize(flagged, (width, height), interpolation=cv2.INTER_NEAREST_EXACT)
 
 
 def fuse(
@@ -209,6 +149,7 @@ class MotionDetector:
         self._recent: list[np.ndarray] = []
         self._sharpness: collections.deque = collections.deque(maxlen=self.fit_config.blur_history)
         self._picture: Picture | None = None
+        self._last: FrameResult | None = None  # held for a repeated frame
 
     def reset(self) -> None:
         """Start afresh (a new input, or after a gap in the frames)."""
@@ -218,6 +159,7 @@ class MotionDetector:
     def _reset_judging(self) -> None:
         """Forget what :meth:`judge` keeps (not the measurement's state,
         which the measuring thread owns)."""
+        self._last = None
         self.tracker.reset()
         for det in self.detectors.values():
             det.reset()
@@ -279,12 +221,22 @@ class MotionDetector:
 
     def judge(self, flow: object | None, index: int, time_s: float) -> FrameResult:
         """The second half of :meth:`process`: detectors, fusion and objects
-        on a measurement from :meth:`measure_frame`, given in frame order."""
-        if flow is None:
-            empty = np.zeros((GRID, GRID), bool)
-            return FrameResult(index, time_s, [], empty, None, None, None)
-        if self.measure == "velocity":
-            return self._velocity_frame(flow, index, time_s)
+        on a measurement from :meth:`measure_frame`, given in frame order.
+
+        A frame that repeats the last one (``REPEAT``) carries the last
+        result, marked ``repeat`` and ``held_from``."""
+        if flow is REPEAT and self._last is not None:
+            return dataclasses.replace(self._last.held(index, time_s), repeat=True)
+        if flow is None or flow is REPEAT:
+            result = FrameResult(index, time_s, [], np.zeros((GRID, GRID), bool), None, None, None)
+        elif self.measure == "velocity":
+            result = self._velocity_frame(flow, index, time_s)
+        else:
+            result = self._normal_frame(flow, index, time_s)
+        self._last = result
+        return result
+
+    def _normal_frame(self, flow, index: int, time_s: float) -> FrameResult:
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         flagged, regions = fuse(outputs, flow.geometry, self.min_cells)
         flagged, regions = self._persistent(flagged, regions)

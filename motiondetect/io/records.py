@@ -36,6 +36,8 @@ def frame_record(result: FrameResult) -> dict:
         record["reason"] = result.reason
     if result.held_from is not None:
         record["held_from"] = result.held_from
+    if result.repeat:
+        record["repeat"] = True
     return record
 
 

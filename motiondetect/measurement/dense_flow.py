@@ -26,6 +26,7 @@ from motiondetect.measurement import stages
 from motiondetect.measurement.aperture import structure_tensor
 from motiondetect.measurement.normal_flow import GridGeometry
 from motiondetect.measurement.picture import BAR_LIMIT, Picture, PictureArea
+from motiondetect.measurement.repeats import REPEAT, Repeat, RepeatedFrames
 
 _REMAP_COLUMNS = 4096  # points per row when remapping a list of points
 
@@ -70,6 +71,11 @@ class DenseFlowConfig:
         has stayed dark is a black bar, left out of the measurement
         (:mod:`~motiondetect.measurement.picture`; FFmpeg cropdetect's 24);
         0 measures the whole frame.
+    repeat_level : float
+        Mean absolute difference from the last frame, grey levels at working
+        size, at or below which a frame may repeat it (and then also at most
+        a quarter of the usual difference between frames;
+        :mod:`~motiondetect.measurement.repeats`); 0: every frame is measured.
     """
 
     work_size: int = 320
@@ -79,12 +85,13 @@ class DenseFlowConfig:
     refinement_iterations: int | None = None
     check_preset: Literal["ultrafast", "fast", "medium", "off"] = "ultrafast"
     bar_limit: int = BAR_LIMIT
+    repeat_level: float = 1.0
 
     def __post_init__(self) -> None:
         check_fields(
             self,
             positive=("work_size", "patch_stride"),
-            non_negative=("bar_limit",),
+            non_negative=("bar_limit", "repeat_level"),
             choices={"preset": tuple(PRESETS), "check_preset": (*PRESETS, "off")},
         )
         if self.descent_iterations is not None:
@@ -276,12 +283,14 @@ class DenseFlow:
         self._previous: np.ndarray | None = None
         self._pictures = PictureArea(self.config.bar_limit) if self.config.bar_limit > 0 else None
         self._picture: Picture | None = None
+        self._repeats = RepeatedFrames(self.config.repeat_level)
         self._geometry: GridGeometry | None = None
         self._grid: np.ndarray | None = None
 
     def reset(self) -> None:
-        """Forget the delayed frame, and the picture area."""
+        """Forget the delayed frame, the picture area and the usual difference between frames."""
         self._previous = None
+        self._repeats.reset()
         if self._pictures is not None:
             self._pictures.reset()
 
@@ -289,12 +298,15 @@ class DenseFlow:
         work = stages.working_size(width, height, min(self.config.work_size, max(width, height)))
         return GridGeometry((width, height), work)
 
-    def process(self, frame: np.ndarray) -> VelocityField | None:
+    def process(self, frame: np.ndarray) -> VelocityField | Repeat | None:
         """Measure the velocity between the previous frame and ``frame``.
 
         Only the picture inside black bars is measured, when the frame has
         them (:attr:`VelocityField.picture`; ``bar_limit`` 0: the whole
         frame); a change of picture starts afresh, like a change of size.
+        A frame that repeats the last one is not measured: it gives
+        :data:`~motiondetect.measurement.repeats.REPEAT`, and the next frame
+        is measured against the last that differed.
 
         Parameters
         ----------
@@ -302,7 +314,7 @@ class DenseFlow:
 
         Returns
         -------
-        VelocityField or None
+        VelocityField, REPEAT or None
             None for the first frame (of this size and picture).
         """
         stages.validate_frame(frame)
@@ -317,6 +329,8 @@ class DenseFlow:
             self._grid = pixel_grid(*self._geometry.work_size)
             self._previous = None
         grey = working_grey(frame, self._geometry.work_size)
+        if self._previous is not None and self._repeats.repeats(grey, self._previous):
+            return REPEAT
         previous, self._previous = self._previous, grey
         if previous is None:
             return None

@@ -1,0 +1,62 @@
+"""Frames that repeat the one before carry its result (frame-rate conversion, dropped capture)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.measurement.dense_flow import DenseFlowConfig
+from motiondetect.measurement.repeats import RepeatedFrames
+
+from .test_velocity import H, W, _pan_with_mover
+
+
+def test_a_repeat_is_a_drop_to_codec_noise_from_the_usual_difference():
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 256, (H, W), np.uint8) for _ in range(4)]
+    repeats = RepeatedFrames(1.0)
+    assert not repeats.repeats(frames[0], frames[0])  # no usual difference known yet
+    assert not repeats.repeats(frames[1], frames[0])
+    assert not repeats.repeats(frames[2], frames[1])
+    noisy = np.clip(frames[2].astype(int) + rng.integers(-1, 2, (H, W)), 0, 255).astype(np.uint8)
+    assert repeats.repeats(noisy, frames[2])  # re-encoded: within a grey level
+    assert not repeats.repeats(frames[3], frames[2])
+
+
+def test_a_clean_still_view_is_never_taken_for_repeats():
+    """Frames that all differ by less than the level (a still camera, a
+    clean picture) differ as usual: none is a repeat."""
+    rng = np.random.default_rng(1)
+    base = rng.integers(0, 256, (H, W)).astype(int)
+    frames = [
+        np.clip(base + rng.integers(-1, 2, (H, W)), 0, 255).astype(np.uint8) for _ in range(30)
+    ]
+    repeats = RepeatedFrames(1.0)
+    assert not any(repeats.repeats(b, a) for a, b in zip(frames, frames[1:], strict=False))
+    assert not any(RepeatedFrames(0.0).repeats(f, f) for f in frames)  # 0: off
+
+
+def test_a_repeated_frame_carries_the_last_result_and_changes_nothing_after():
+    """A pan with a mover, every 4th frame shown twice (24 fps as 30): each
+    repeat carries the last frame's result, marked, and every other frame's
+    result is that of the clip without repeats, pixel for pixel. Measured as
+    frames of their own (``repeat_level`` 0), the repeats show no motion
+    and the mover is lost on them."""
+    clip = [image for image, _ in _pan_with_mover(lambda t: (60 + 3 * t, 100 + t), frames=16)]
+    shown = [i for i in range(16) for _ in range(2 if i % 4 == 3 else 1)]
+    once = MotionDetector("both")
+    plain = [once.process(clip[i], i, 0.0) for i in range(16)]
+    held = MotionDetector("both")
+    measured = MotionDetector("both", DenseFlowConfig(repeat_level=0))
+    lost = 0
+    for n, i in enumerate(shown):
+        result = held.process(clip[i], n, n / 30)
+        other = measured.process(clip[i], n, n / 30)
+        again = n > 0 and shown[n - 1] == i
+        assert result.repeat == again
+        if again:
+            assert result.held_from == n - 1
+            lost += not other.regions
+        assert np.array_equal(result.input_mask(W, H), plain[i].input_mask(W, H))
+        assert [r.bbox for r in result.regions] == [r.bbox for r in plain[i].regions]
+    assert lost == 4  # every repeat, measured as a frame
