@@ -50,7 +50,7 @@ class FrameDiff:
     def __init__(self):
         self.prev = None
 
-    def __call__(self, frame):
+    def __call__(self, frame, time_s=0.0):
         g = cv2.GaussianBlur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), (5, 5), 0)
         prev, self.prev = self.prev, g
         if prev is None:
@@ -65,7 +65,7 @@ class Mog2:
     def __init__(self):
         self.sub = cv2.createBackgroundSubtractorMOG2(detectShadows=False)
 
-    def __call__(self, frame):
+    def __call__(self, frame, time_s=0.0):
         return np.where(self.sub.apply(frame) > 127, 255, 0).astype(np.uint8)
 
 
@@ -77,7 +77,7 @@ class HomographyDiff:
         self.matcher = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True)
         self.prev = None
 
-    def __call__(self, frame):
+    def __call__(self, frame, time_s=0.0):
         g = cv2.GaussianBlur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), (5, 5), 0)
         kp, des = self.orb.detectAndCompute(g, None)
         prev, self.prev = self.prev, (g, kp, des)
@@ -109,7 +109,7 @@ class DenseResidual:
         self.prev = None
         self.prev_mask = None
 
-    def __call__(self, frame):
+    def __call__(self, frame, time_s=0.0):
         h0, w0 = frame.shape[:2]
         s = 320 / max(h0, w0)
         small = cv2.resize(frame, (round(w0 * s), round(h0 * s)), interpolation=cv2.INTER_AREA)
@@ -149,10 +149,10 @@ class Ours:
         self.every = frame_skip + 1
         self.held = None
 
-    def __call__(self, frame):
+    def __call__(self, frame, time_s=0.0):
         h, w = frame.shape[:2]
         if self.index % self.every == 0:
-            self.held = self.md.process(frame, self.index, 0.0).input_mask(w, h)
+            self.held = self.md.process(frame, self.index, time_s).input_mask(w, h)
         self.index += 1
         return self.held
 
@@ -207,7 +207,7 @@ def run_sequence(source: Path, gt: Path | None, methods) -> dict[str, tuple[Coun
                     truth = read_mask(masks[frame.index])
             for method in methods:
                 t = time.perf_counter()
-                pred = method(image)
+                pred = method(image, frame.time_s)
                 results[method.name][1] += time.perf_counter() - t
                 if boxes is not None and WARMUP <= frame.index < len(boxes):
                     results[method.name][0].add(score_box(pred, boxes[frame.index]))

@@ -133,7 +133,8 @@ def test_gap_and_stray_file_in_frames_folder(tmp_path, frames):
     logger.setLevel(logging.WARNING)
     try:
         with open_source(seq) as source:
-            numbers = [f.number for f in source]
+            frames_read = list(source)
+            numbers = [f.number for f in frames_read]
     finally:
         logger.removeHandler(handler)
         logger.setLevel(level)
@@ -141,6 +142,8 @@ def test_gap_and_stray_file_in_frames_folder(tmp_path, frames):
     assert any("non-image" in m and "notes.txt" in m for m in messages), messages
     assert any("2 gaps" in m for m in messages), messages
     assert numbers == [1, 2, 3, 7, 8, 10]  # numeric, not lexicographic, order
+    # the gaps are gaps in time (frames left out), at the assumed 30 fps
+    assert [round(f.time_s * 30, 6) for f in frames_read] == [0, 1, 2, 6, 7, 9]
     result = run("detect", seq, "-o", tmp_path / "o", "-q")
     assert result.exit_code == 0
     check_outputs(tmp_path / "o" / "seq", 6)

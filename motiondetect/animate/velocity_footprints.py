@@ -13,6 +13,11 @@ velocity (the fitted homography), which plays the role of the paper's
 observer-motion compensation: a camera's rotational jitter changes every
 velocity at once, and the plane fit absorbs it.
 
+When the frames' times are known and the two intervals differ (frames
+dropped, a phone's variable frame rate), the previous velocity is scaled by
+their ratio first (:func:`interval_ratio`): a smooth motion covers ground
+in proportion to the time.
+
 Only points whose current velocity is itself off the plane are tested.
 Background uncovered at a mover's trailing edge "comes from" where the
 mover was, so without this it would be flagged at every edge; the price
@@ -35,6 +40,8 @@ from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-animate"
 _SQUARE3 = np.ones((3, 3), np.uint8)
+#: Largest ratio of two frames' intervals the continuation is scaled by.
+MAX_INTERVAL_RATIO = 4.0
 
 
 @dataclass(frozen=True)
@@ -163,6 +170,14 @@ def footprint_excess(
     return best
 
 
+def interval_ratio(now_s: float, before_s: float) -> float:
+    """How much longer this frame's interval is than the last one's: a
+    velocity that continues smoothly covers that much more ground (frames
+    dropped, a phone's variable frame rate). Kept within
+    :data:`MAX_INTERVAL_RATIO` either way, against timestamps that jump."""
+    return float(np.clip(now_s / before_s, 1 / MAX_INTERVAL_RATIO, MAX_INTERVAL_RATIO))
+
+
 def violations(
     field: VelocityField, residual: np.ndarray, moving: np.ndarray, previous: np.ndarray,
     tolerance: float, config: VelocityAnimateConfig,
@@ -206,9 +221,10 @@ class VelocityAnimateDetector:
         self.config = config or VelocityAnimateConfig()
         self._previous: np.ndarray | None = None
         self._memory: np.ndarray | None = None
+        self._interval: float | None = None
 
     def reset(self) -> None:
-        self._previous, self._memory = None, None
+        self._previous, self._memory, self._interval = None, None, None
 
     def _remember(self, violation: np.ndarray, field: VelocityField) -> np.ndarray:
         """Frames left of each pixel's animate label, carried along the motion."""
@@ -226,6 +242,9 @@ class VelocityAnimateDetector:
         cfg = self.config
         fit = field.camera if field.camera is not None else fit_camera(field, FitConfig())
         previous, self._previous = self._previous, fit.residual_px
+        interval, self._interval = self._interval, field.interval_s
+        if previous is not None and interval and field.interval_s:
+            previous = previous * np.float32(interval_ratio(field.interval_s, interval))
         if not fit.reliable:
             # The labels are carried along each frame's motion; a frame that
             # cannot be judged breaks that chain (as the ray filter's sum).

@@ -150,6 +150,7 @@ class MotionDetector:
         self._sharpness: collections.deque = collections.deque(maxlen=self.fit_config.blur_history)
         self._picture: Picture | None = None
         self._last: FrameResult | None = None  # held for a repeated frame
+        self._last_time: float | None = None  # of the last frame measured
 
     def reset(self) -> None:
         """Start afresh (a new input, or after a gap in the frames)."""
@@ -159,7 +160,7 @@ class MotionDetector:
     def _reset_judging(self) -> None:
         """Forget what :meth:`judge` keeps (not the measurement's state,
         which the measuring thread owns)."""
-        self._last = None
+        self._last = self._last_time = None
         self.tracker.reset()
         for det in self.detectors.values():
             det.reset()
@@ -225,8 +226,10 @@ class MotionDetector:
 
         A frame that repeats the last one (``REPEAT``) carries the last
         result, marked ``repeat`` and ``held_from``."""
-        if flow is REPEAT and self._last is not None:
-            return dataclasses.replace(self._last.held(index, time_s), repeat=True)
+        if flow is REPEAT:  # no time passes in what it shows
+            self._last_time = time_s
+            if self._last is not None:
+                return dataclasses.replace(self._last.held(index, time_s), repeat=True)
         if flow is None or flow is REPEAT:
             result = FrameResult(index, time_s, [], np.zeros((GRID, GRID), bool), None, None, None)
         elif self.measure == "velocity":
@@ -254,7 +257,7 @@ class MotionDetector:
         self._sharpness.append(fit.sharpness)
         self._epipole = fit.epipole
         tracked = self.tracker.predicted_mask(flow.shape) if self.tracker.config.prior else None
-        flow = flow.judged(fit, tracked)
+        flow = flow.judged(fit, tracked, self._interval(time_s))
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         judged = [out.camera for out in outputs.values() if out.camera is not None]
         camera = judged[0] if judged else fit
@@ -297,6 +300,12 @@ class MotionDetector:
             index, time_s, regions, flagged, known, None, flow, outputs,
             mask=mask, camera=camera, overlay=overlay,
         )  # fmt: skip
+
+    def _interval(self, time_s: float) -> float | None:
+        """Seconds since the last frame measured; None when not known or not
+        increasing (a source without times gives every frame 0)."""
+        last, self._last_time = self._last_time, time_s
+        return time_s - last if last is not None and time_s > last else None
 
     def _support(self, fit: CameraFit, flagged: np.ndarray) -> np.ndarray | None:
         """Where the image changed once the camera's motion is undone: over one

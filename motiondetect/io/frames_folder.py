@@ -3,7 +3,9 @@
 
 Frames are sorted by the last number in their names (``frame_2`` before
 ``frame_10``); other files are skipped with a warning; 16-bit and grey
-images are kept as they are; times step by the given (or assumed) fps.
+images are kept as they are. Times step by the given (or assumed) fps; where
+the numbering has gaps (frames left out of a sequence), a frame numbered
+``n`` is at ``(n - first) / fps``, so the gaps are gaps in time too.
 """
 
 from __future__ import annotations
@@ -63,9 +65,13 @@ class FramesFolderSource(FrameSource):
             log.warning("%s: skipping %d non-image entries (e.g. %s)", path, len(stray), stray[0])
         files.sort(key=numeric_key)
         numbers = [numeric_key(f)[0] for f in files]
-        gaps = sum(1 for a, b in zip(numbers, numbers[1:]) if b - a > 1)
+        steps = [b - a for a, b in zip(numbers, numbers[1:])]
+        gaps = sum(step > 1 for step in steps)
+        rising = bool(numbers) and numbers[0] >= 0 and all(step > 0 for step in steps)
+        self._timed_by_number = bool(gaps) and rising
         if gaps:
-            log.warning("%s: frame numbering has %d gaps; frames are taken in order", path, gaps)
+            timed = "timed by their numbers" if rising else "taken in order"
+            log.warning("%s: frame numbering has %d gaps; frames are %s", path, gaps, timed)
         first = self._read(files[0]) if files else None
         if first is None:
             raise VideoError(f"{path}: no readable image frames")
@@ -93,7 +99,8 @@ class FramesFolderSource(FrameSource):
                 log.warning("%s: skipping unreadable or differently sized frame", file)
                 self.partial = True
                 continue
-            yield SourceFrame(index, index / self.info.fps, image, self._numbers[i])
+            step = self._numbers[i] - self._numbers[0] if self._timed_by_number else index
+            yield SourceFrame(index, step / self.info.fps, image, self._numbers[i])
             index += 1
 
     @property

@@ -134,6 +134,9 @@ class VelocityField:
         The part of the frame measured, when it has black bars
         (:mod:`~motiondetect.measurement.picture`); ``geometry.input_size``
         is then the picture's size. None: the whole frame.
+    interval_s : float, optional
+        Seconds between the two frames measured, attached with the camera
+        when the frames' times are known; None: one frame step.
     """
 
     velocity_px: np.ndarray
@@ -146,17 +149,20 @@ class VelocityField:
     patch_px: int = 8
     forward_px: np.ndarray | None = None
     picture: Picture | None = None
+    interval_s: float | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.grey.shape
 
-    def judged(self, camera: Any, tracked: np.ndarray | None = None) -> VelocityField:
-        """This field with its observer motion (and track prior) attached,
+    def judged(
+        self, camera: Any, tracked: np.ndarray | None = None, interval_s: float | None = None
+    ) -> VelocityField:
+        """This field with its observer motion (track prior, interval) attached,
         keeping every map already computed from the velocity and the frame
         (the cached properties, ``source_px`` and ``structure``): they
         depend on neither."""
-        out = dataclasses.replace(self, camera=camera, tracked=tracked)
+        out = dataclasses.replace(self, camera=camera, tracked=tracked, interval_s=interval_s)
         for name, value in self.__dict__.items():
             out.__dict__.setdefault(name, value)  # fields are set; only caches are missing
         return out

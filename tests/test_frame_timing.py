@@ -1,4 +1,4 @@
-"""Frames that repeat the one before carry its result (frame-rate conversion, dropped capture)."""
+"""Frame timing: repeated frames carry the last result; dropped frames are gaps in time."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from motiondetect.detection.detector import MotionDetector
 from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.repeats import RepeatedFrames
 
-from .test_velocity import H, W, _pan_with_mover
+from .test_velocity import H, W, _pan_with_mover, background, paste
 
 
 def test_a_repeat_is_a_drop_to_codec_noise_from_the_usual_difference():
@@ -60,3 +60,38 @@ def test_a_repeated_frame_carries_the_last_result_and_changes_nothing_after():
         assert np.array_equal(result.input_mask(W, H), plain[i].input_mask(W, H))
         assert [r.bbox for r in result.regions] == [r.bbox for r in plain[i].regions]
     assert lost == 4  # every repeat, measured as a frame
+
+
+def test_dropped_frames_are_gaps_in_time_for_the_animate_test():
+    """A pan with a mover at a steady 3 px a frame, one frame in three or
+    four dropped: given the frames' times, the mover covers twice the
+    ground over a gap and the animate detector sees its motion continue
+    (never flagged); without times every gap looks like a jump in speed,
+    and it is flagged from the first gap on."""
+    kept = [0, 1, 2, 3, 5, 6, 7, 9, 10, 11, 13, 14, 16, 17, 18, 20, 21, 23, 24, 25]
+
+    def flagged(timed: bool) -> list[bool]:
+        md = MotionDetector("animate")
+        out = []
+        for n, i in enumerate(kept):
+            image, mask = paste(background(2.0 * i), 40 + 3.0 * i, 100 + 1.0 * i)
+            result = md.process(image, n, i / 30 if timed else 0.0)
+            out.append((result.input_mask(W, H) > 0)[mask].mean() >= 0.5)
+        return out
+
+    assert not any(flagged(timed=True))
+    assert all(flagged(timed=False)[5:])
+
+
+def test_no_time_passes_in_a_repeated_frame():
+    """24 fps shown at 30 by repeating every 4th frame, each frame timed as
+    shown: the frame after a repeat moved one step of the film from the
+    frame repeated, so the animate detector sees a steady mover continue."""
+    shown = [i for i in range(20) for _ in range(2 if i % 4 == 3 else 1)]
+    md = MotionDetector("animate")
+    flagged = []
+    for n, i in enumerate(shown):
+        image, mask = paste(background(2.0 * i), 40 + 3.0 * i, 100 + 1.0 * i)
+        result = md.process(image, n, n / 30)
+        flagged.append((result.input_mask(W, H) > 0)[mask].mean() >= 0.5)
+    assert not any(flagged)
