@@ -7,6 +7,7 @@ import pytest
 
 from motiondetect.detection.detector import FrameResult
 from motiondetect.io.annotate import annotate
+from motiondetect.io.colours import RAY
 
 
 @pytest.mark.parametrize("size", [(232, 152), (352, 288), (854, 480)])
@@ -38,3 +39,25 @@ def test_a_caption_left_out_is_outlined_and_nothing_else_is_drawn_for_it():
     assert ys.size and ys.min() >= 196 and ys.max() <= 212  # around rows 200-207
     assert xs.min() >= 36 and xs.max() <= 164  # around columns 40-159
     assert not changed[203, 60]  # an outline, the caption itself left as it is
+
+
+@pytest.mark.parametrize(("left", "right", "place"), [(0, 70, "right"), (0, 320, "top")])
+def test_the_legend_keeps_off_a_caption_left_out(left, right, place):
+    """A caption along the bottom left (found fixed to the screen) keeps
+    the legend's place free: the legend goes to the bottom right, or, under
+    a caption as wide as the frame, below the label at the top."""
+    w, h = 320, 240
+    grey = np.full((h, w, 3), 128, np.uint8)
+    overlay = np.zeros((120, 160), bool)  # work pixels, half the input size
+    overlay[112:118, left // 2 : right // 2] = True
+    plain = FrameResult(0, 0.0, [], np.zeros((64, 64), bool), None, None, None)
+    marked = FrameResult(0, 0.0, [], np.zeros((64, 64), bool), None, None, None, overlay=overlay)
+    before, after = annotate(grey, plain, (w, h)), annotate(grey, marked, (w, h))
+    orange = np.all(before == RAY, axis=2)  # the legend's first swatch
+    assert orange[h - 20 :, : w // 3].any()
+    moved = np.all(after == RAY, axis=2)
+    assert not moved[h - 20 :, : w // 3].any()
+    if place == "right":
+        assert moved[h - 20 :, w // 3 :].any()
+    else:
+        assert moved[20:50].any() and not moved[h - 20 :].any()

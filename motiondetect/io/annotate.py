@@ -35,13 +35,14 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         tint = out.copy()
         tint[flagged > 0] = (0, 0, 255)
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
-    _draw_overlay(out, result.overlay)
+    overlay = _overlay_mask(out, result.overlay)
+    _draw_overlay(out, overlay)
     draw_boxes(out, [r.to_json() for r in result.regions], sx, sy)
     _draw_coarse(out, result)
     if not result.reliable:
         cv2.rectangle(out, (0, 0), (out.shape[1] - 1, out.shape[0] - 1), (0, 200, 255), 4)
     _draw_label(out, result)
-    _draw_legend(out)
+    _draw_legend(out, overlay)
     return out
 
 
@@ -62,14 +63,21 @@ def draw_boxes(
     return out
 
 
-def _draw_overlay(out: np.ndarray, overlay: np.ndarray | None) -> None:
-    """Outline, in grey, content fixed to the screen that was left out (a
-    burnt-in caption or logo; work pixels, ``FrameResult.overlay``)."""
+def _overlay_mask(out: np.ndarray, overlay: np.ndarray | None) -> np.ndarray | None:
+    """Content fixed to the screen that was left out (a burnt-in caption or
+    logo; ``FrameResult.overlay``, work pixels) at ``out``'s size, grown by
+    2 px, (h, w) uint8 0/1; None when there is none."""
     if overlay is None:
-        return
+        return None
     h, w = out.shape[:2]
     mask = cv2.resize(overlay.view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST)
-    mask = cv2.dilate(mask, np.ones((5, 5), np.uint8))
+    return cv2.dilate(mask, np.ones((5, 5), np.uint8))
+
+
+def _draw_overlay(out: np.ndarray, mask: np.ndarray | None) -> None:
+    """Outline, in grey, the overlay left out (:func:`_overlay_mask`)."""
+    if mask is None:
+        return
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     cv2.drawContours(out, contours, -1, _LEFT_OUT, 1, cv2.LINE_AA)
 
@@ -90,17 +98,32 @@ def _text(out: np.ndarray, text: str, origin: tuple[int, int], colour) -> None:
     cv2.putText(out, text, origin, _FONT, scale, colour, thick, cv2.LINE_AA)
 
 
-def _draw_legend(out: np.ndarray) -> None:
+def _draw_legend(out: np.ndarray, overlay: np.ndarray | None = None) -> None:
     """Box colours by detector, on one line at the bottom left (stacked, the
-    three entries covered a third of a small frame's height)."""
+    three entries covered a third of a small frame's height); at the bottom
+    right, or under the label, when a caption or logo left out as fixed to
+    the screen (``overlay``, :func:`_overlay_mask`) lies there."""
     scale, thick = _text_size(out)
     swatch = int(round(10 * scale / 0.4))
-    x, y = 6, out.shape[0] - 6
+    widths = [cv2.getTextSize(name, _FONT, scale, thick)[0][0] for name, _ in LEGEND]
+    width = sum(widths) + len(LEGEND) * (swatch + 4 + 3 * swatch // 2)
+    x, y = _legend_origin(out.shape, width, swatch, overlay)
     for name, colour in LEGEND:
         cv2.rectangle(out, (x, y - swatch), (x + swatch, y), colour, -1)
         x += swatch + 4
         _text(out, name, (x, y), colour)
         x += cv2.getTextSize(name, _FONT, scale, thick)[0][0] + 3 * swatch // 2
+
+
+def _legend_origin(shape, width: int, height: int, overlay: np.ndarray | None) -> tuple[int, int]:
+    """The legend's bottom-left corner: the frame's bottom left, else its
+    bottom right, else under the label, the first that leaves ``overlay`` clear."""
+    h, w = shape[:2]
+    places = [(6, h - 6), (max(6, w - 6 - width), h - 6), (6, 26 + height)]
+    for x, y in places:
+        if overlay is None or not overlay[max(0, y - height) : y + 1, x : x + width].any():
+            return x, y
+    return places[0]
 
 
 def _draw_coarse(out: np.ndarray, result: FrameResult) -> None:
