@@ -41,11 +41,28 @@ def test_the_picture_is_found_after_dark_frames_and_opens_where_a_bar_lights():
     bleed[:, BAR - BLEED_PX : BAR] = 120  # a codec's ringing next to the picture
     assert area.update(bleed).box == (BAR, 0, W, H)
     lit = frame.copy()
-    lit[100:110, 5:15] = 200  # content well inside the left bar
-    assert area.update(lit).box == (0, 0, W + BAR, H)
-    lit[100:110, -15:-5] = 200
-    assert area.update(lit) is None  # no bar left: the whole frame, for good
+    lit[100:110, 5:15] = 200  # content well inside the left bar: no centred pair left
+    assert area.update(lit) is None  # the whole frame, for good
     assert area.update(frame) is None
+
+
+def test_a_title_on_black_gives_way_to_a_letterboxed_film():
+    """Centred titles on black look like pictures inside bars; when the
+    film starts, the picture grows to the film's letterbox, not to the
+    frame's edges. Opening a third time gives up on bars."""
+    area = PictureArea()
+    title = np.zeros((240, 400, 3), np.uint8)
+    title[80:160, 120:280] = 255
+    assert area.update(title).box == (120, 80, 160, 80)
+    title[60:180, 80:320] = 255  # a larger title: the first opening
+    assert area.update(title).box == (80, 60, 240, 120)
+    film = np.zeros((240, 400, 3), np.uint8)
+    film[30:210] = cv2.resize(background(0.0), (400, 180))
+    assert area.update(film).box == (0, 30, 400, 180)  # the second
+    assert area.update(film).box == (0, 30, 400, 180)
+    whole = cv2.resize(background(0.0), (400, 240))
+    assert area.update(whole) is None  # a third: the whole frame, for good
+    assert area.update(film) is None
 
 
 def test_a_thin_dark_edge_is_no_bar():

@@ -11,8 +11,9 @@ A bar is a band along a frame edge in which no pixel has ever been brighter
 than ``limit`` grey levels (FFmpeg's ``cropdetect`` uses the same limit,
 24 of 255), beyond the codec's bleed next to the picture; bars come in
 pairs of one thickness, the picture centred between them. The picture only
-grows: once content shows in a bar, that side of the frame is picture for
-the rest of the input.
+grows: once content shows in a bar, the picture takes in this frame's
+content (bars that are no longer a centred pair go), and after two such
+openings the whole frame is the picture.
 """
 
 from __future__ import annotations
@@ -27,6 +28,9 @@ from motiondetect.measurement.stages import MIN_FRAME_SIDE
 BAR_LIMIT = 24
 #: A dark band thinner than this share of its side is not a bar.
 MIN_BAR_SHARE = 0.01
+#: Times the picture may grow into lit bars before the whole frame is taken
+#: (each starts the measurement afresh).
+MAX_OPENINGS = 2
 #: Input px of a bar next to the picture where brighter pixels do not count:
 #: a codec's blocks (8-16 px) ring, and its half-resolution colour bleeds,
 #: across the picture's edge into the bar.
@@ -99,6 +103,7 @@ class PictureArea:
         self._bounds: tuple[int, int, int, int] | None = None  # x0, y0, x1, y1
         self._whole = False
         self._size: tuple[int, int] | None = None
+        self._openings = 0
 
     def update(self, frame: np.ndarray) -> Picture | None:
         h, w = frame.shape[:2]
@@ -121,20 +126,26 @@ class PictureArea:
         return Picture((x0, y0, x1 - x0, y1 - y0), (w, h))
 
     def _lit_bars_opened(self, frame: np.ndarray) -> tuple[int, int, int, int]:
-        """The bounds, with each bar that now shows content (beyond the bleed
-        next to the picture) given to the picture."""
+        """The bounds, grown to this frame's content when content shows in a
+        bar (beyond the bleed next to the picture): a title on black gives
+        way to a letterboxed film. After :data:`MAX_OPENINGS` the whole
+        frame is the picture."""
         h, w = frame.shape[:2]
         x0, y0, x1, y1 = self._bounds
         level, m = _level(frame, self.limit), BLEED_PX
-        if y0 > m and frame[: y0 - m].max() > level:
-            y0 = 0
-        if y1 + m < h and frame[y1 + m :].max() > level:
-            y1 = h
-        if x0 > m and frame[:, : x0 - m].max() > level:
-            x0 = 0
-        if x1 + m < w and frame[:, x1 + m :].max() > level:
-            x1 = w
-        return x0, y0, x1, y1
+        bars = (
+            frame[: max(y0 - m, 0)],
+            frame[y1 + m :],
+            frame[:, : max(x0 - m, 0)],
+            frame[:, x1 + m :],
+        )
+        if not any(bar.size and bar.max() > level for bar in bars):
+            return self._bounds
+        self._openings += 1
+        if self._openings > MAX_OPENINGS:
+            return 0, 0, w, h
+        fx0, fy0, fx1, fy1 = content_bounds(frame, self.limit)  # a bar is lit: not None
+        return _bars_kept((min(x0, fx0), min(y0, fy0), max(x1, fx1), max(y1, fy1)), w, h)
 
 
 def _bars_kept(bounds, width: int, height: int) -> tuple[int, int, int, int]:
