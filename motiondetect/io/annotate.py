@@ -165,7 +165,7 @@ def _draw_label(out: np.ndarray, result: FrameResult) -> None:
     name, class_id = _observer_label(result)
     text = f"#{result.index} {result.time_s:.2f}s {name}"
     if result.held_from is not None:
-        text += f" (held from #{result.held_from})"
+        text += f" ({'repeats' if result.repeat else 'held from'} #{result.held_from})"
     colour = CLASS_COLOURS.get(class_id, (255, 255, 255))
     cv2.circle(out, (out.shape[1] - 10, 10), 6, colour, -1)
     white = (255, 255, 255) if result.reliable else (0, 200, 255)
