@@ -20,6 +20,9 @@ region is a false alarm) are written into ``OUT`` with
   ``F`` of the height) or left and right (each ``F`` of the width), as a
   film in a 16:9 frame or a 4:3 or upright phone clip posted at 16:9 shows;
   the ground truth masks get the same bars, marked static;
+* ``--blurred-sides``: with ``--pillarbox``, the bars filled as social
+  media fill them: the frame enlarged to the whole width, blurred (a
+  Gaussian of 5 % of the width) and darkened, moving with the video;
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -74,17 +77,31 @@ def caption(image: np.ndarray, t: int) -> np.ndarray:
     return out
 
 
-def bars(image: np.ndarray, letterbox: float, pillarbox: float) -> np.ndarray:
+def bars(
+    image: np.ndarray, letterbox: float, pillarbox: float, blurred: bool = False
+) -> np.ndarray:
     """``image`` with black bars: ``letterbox`` of its height above and below,
-    ``pillarbox`` of its width left and right."""
+    ``pillarbox`` of its width left and right; ``blurred``: the side bars
+    filled with the frame enlarged, blurred and darkened (masks stay black)."""
     h, w = image.shape[:2]
     dy, dx = round(letterbox * h), round(pillarbox * w)
-    return cv2.copyMakeBorder(image, dy, dy, dx, dx, cv2.BORDER_CONSTANT, value=0)
+    out = cv2.copyMakeBorder(image, dy, dy, dx, dx, cv2.BORDER_CONSTANT, value=0)
+    if blurred and dx and image.ndim == 3:
+        width = w + 2 * dx
+        scale = width / w
+        big = cv2.resize(image, (width, round(h * scale)), interpolation=cv2.INTER_LINEAR)
+        top = (big.shape[0] - h) // 2
+        back = cv2.GaussianBlur(big[top : top + h], (0, 0), 0.05 * width)
+        back = (back.astype(np.float32) * 0.6).astype(np.uint8)
+        out[dy : dy + h, :dx] = back[:, :dx]
+        out[dy : dy + h, dx + w :] = back[:, dx + w :]
+    return out
 
 
 def degraded(
     image: np.ndarray, t: int, noise: float, exposure: float, rng, distortion: float = 0.0,
     overlay: bool = False, letterbox: float = 0.0, pillarbox: float = 0.0,
+    blurred: bool = False,
 ) -> np.ndarray:  # fmt: skip
     """Frame ``t`` (uint8) through the lens, with the exposure drift and the
     sensor noise applied, the bars added and the caption burnt in last."""
@@ -92,7 +109,7 @@ def degraded(
     out = _lens(image, distortion).astype(np.float32) * gain
     if noise > 0:
         out += rng.normal(0.0, noise, image.shape).astype(np.float32)
-    out = bars(np.clip(np.rint(out), 0, 255).astype(np.uint8), letterbox, pillarbox)
+    out = bars(np.clip(np.rint(out), 0, 255).astype(np.uint8), letterbox, pillarbox, blurred)
     return caption(out, t) if overlay else out
 
 
@@ -104,7 +121,7 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
         image = cv2.imread(str(path))
         image = degraded(
             image, t, args.noise, args.exposure, rng, args.distortion, args.overlay,
-            args.letterbox, args.pillarbox,
+            args.letterbox, args.pillarbox, args.blurred_sides,
         )  # fmt: skip
         cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
@@ -134,6 +151,7 @@ def main() -> None:
     parser.add_argument("--overlay", action="store_true", help="a dashcam's burnt-in caption")
     parser.add_argument("--letterbox", type=float, default=0.0, help="bar height, 0-0.5")
     parser.add_argument("--pillarbox", type=float, default=0.0, help="bar width, 0-0.5")
+    parser.add_argument("--blurred-sides", action="store_true", help="fill the side bars")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
         parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")
