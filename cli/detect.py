@@ -322,7 +322,7 @@ def _picture(box: list[int] | None) -> str:
     if not box:
         return ""
     x, y, w, h = box
-    return f"; black bars left out, picture {w}x{h} at ({x}, {y})"
+    return f"; black bars or side panels left out, picture {w}x{h} at ({x}, {y})"
 
 
 def _print_summary(result) -> None:

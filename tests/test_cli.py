@@ -478,7 +478,7 @@ def test_a_letterboxed_input_is_measured_inside_its_bars(tmp_path, clip_frames):
     summary = check_outputs(out, 16, video=False)
     assert summary["totals"]["picture"] == [0, bar, width, height]
     assert summary["totals"]["detections"] > 0
-    assert f"black bars left out, picture {width}x{height} at (0, {bar})" in result.output
+    assert f"side panels left out, picture {width}x{height} at (0, {bar})" in result.output
     for line in (out / "frames.jsonl").read_text().splitlines():
         for det in json.loads(line)["detections"]:
             x, y, w, h = det["bbox"]

@@ -18,6 +18,18 @@ def _pillarboxed(image: np.ndarray) -> np.ndarray:
     return cv2.copyMakeBorder(image, 0, 0, BAR, BAR, cv2.BORDER_CONSTANT, value=0)
 
 
+def _panelled(image: np.ndarray, bar: int = BAR) -> np.ndarray:
+    """``image`` between social media's side panels: itself enlarged to the
+    whole width, blurred (a Gaussian of 5 % of the width) and darkened."""
+    h, w = image.shape[:2]
+    width = w + 2 * bar
+    big = cv2.resize(image, (width, round(h * width / w)))
+    top = (big.shape[0] - h) // 2
+    out = (cv2.GaussianBlur(big[top : top + h], (0, 0), 0.05 * width) * 0.6).astype(np.uint8)
+    out[:, bar : bar + w] = image
+    return out
+
+
 def test_content_bounds_are_the_box_of_everything_above_the_limit():
     frame = np.zeros((100, 200, 3), np.uint8)
     frame[10:90, 30:170] = 25  # just above cropdetect's 24
@@ -63,6 +75,20 @@ def test_a_title_on_black_gives_way_to_a_letterboxed_film():
     whole = cv2.resize(background(0.0), (400, 240))
     assert area.update(whole) is None  # a third: the whole frame, for good
     assert area.update(film) is None
+
+
+def test_blurred_panels_beside_the_picture_are_bars():
+    """The panels are bright, but show no detail: the picture between them
+    is found (within the reduced frame's pixel), and a panel that keeps
+    moving with the video does not light up."""
+    area = PictureArea()
+    for t in range(10):
+        picture = area.update(_panelled(background(2.0 * t)))
+        x, y, w, h = picture.box
+        assert abs(x - BAR) <= 1 and abs(w - W) <= 2 and (y, h) == (0, H)
+    sharp = _panelled(background(0.0))
+    sharp[:, 5:15] = background(0.0)[:, :10]  # detail in a panel: the picture opens
+    assert area.update(sharp) is None
 
 
 def test_a_thin_dark_edge_is_no_bar():
@@ -122,3 +148,27 @@ def test_a_dark_band_on_one_side_only_is_no_bar():
     assert PictureArea().update(frame) is None
     frame[-50:] = 0
     assert PictureArea().update(frame).box == (0, 50, W, H - 100)
+
+
+def test_a_panelled_pan_is_measured_between_its_panels():
+    """Social media's blurred panels beside a pan: measured between them,
+    the mover is found on every frame and nothing is flagged at the
+    picture's edges; measuring the whole frame (``bar_limit`` 0), the
+    picture's edges are flagged, where content enters it."""
+    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=20)
+
+    def run(config: DenseFlowConfig) -> tuple[list[int], list[bool]]:
+        md = MotionDetector("both", config)
+        at_edges, found = [], []
+        for t, (image, mask) in enumerate(clip):
+            result = md.process(_panelled(image), t, t / 30)
+            boxes = [r.bbox for r in result.regions]
+            at_edges.append(sum(x < BAR + 12 or x + w > W + BAR - 12 for x, _, w, _ in boxes))
+            flagged = result.input_mask(W + 2 * BAR, H)[:, BAR:-BAR] > 0
+            found.append(flagged[mask].mean() >= 0.5)
+        return at_edges[3:], found[3:]
+
+    edges, found = run(DenseFlowConfig())
+    assert sum(edges) == 0 and all(found)
+    whole_edges, _ = run(DenseFlowConfig(bar_limit=0))
+    assert sum(whole_edges) >= len(whole_edges)

@@ -68,9 +68,10 @@ class DenseFlowConfig:
         "fast" (docs/detectors.md).
     bar_limit : int
         Grey level (of 255) at or below which a band along a frame edge that
-        has stayed dark is a black bar, left out of the measurement
-        (:mod:`~motiondetect.measurement.picture`; FFmpeg cropdetect's 24);
-        0 measures the whole frame.
+        has stayed dark is a black bar (FFmpeg cropdetect's 24; a band
+        without detail, a blurred panel, is one too), left out of the
+        measurement (:mod:`~motiondetect.measurement.picture`); 0 measures
+        the whole frame.
     repeat_level : float
         Mean absolute difference from the last frame, grey levels at working
         size, at or below which a frame may repeat it (and then also at most
