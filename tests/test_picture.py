@@ -172,3 +172,16 @@ def test_a_panelled_pan_is_measured_between_its_panels():
     assert sum(edges) == 0 and all(found)
     whole_edges, _ = run(DenseFlowConfig(bar_limit=0))
     assert sum(whole_edges) >= len(whole_edges)
+
+
+def test_a_fade_to_black_says_nothing_of_the_bars():
+    """A picture gone dark and plain (a fade, a cut to black) shows no
+    detail, so faint noise in the bars does not open them."""
+    area = PictureArea()
+    assert area.update(_pillarboxed(background(0.0))).box == (BAR, 0, W, H)
+    faded = np.full((H, W + 2 * BAR, 3), 30, np.uint8)
+    faded[:, :BAR] = faded[:, -BAR:] = 0
+    faded[::2, 5:15] = 3  # a codec's faint noise in the left bar
+    for _ in range(3):  # (each opening counts; the third would give up on bars)
+        assert area.update(faded).box == (BAR, 0, W, H)
+    assert area.update(_pillarboxed(background(0.0))).box == (BAR, 0, W, H)

@@ -12,10 +12,10 @@ than ``limit`` grey levels (FFmpeg's ``cropdetect`` uses the same limit,
 24 of 255), or which shows no detail (the blurred, enlarged copy of the
 video that social media put beside an upright phone clip), beyond the
 codec's bleed next to the picture; bars come in pairs of one thickness, the
-picture centred between them. The picture only
-grows: once detail shows in a bar, the picture takes in this frame's
-content (bars that are no longer a centred pair go), and after two such
-openings the whole frame is the picture.
+picture centred between them. The picture only grows: once detail shows in
+a bar, the picture takes in this frame's content (bars that are no longer a
+centred pair go), and after two such openings the whole frame is the
+picture.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ MIN_BAR_SHARE = 0.01
 #: Times the picture may grow into lit bars before the whole frame is taken
 #: (each starts the measurement afresh).
 MAX_OPENINGS = 2
-#: Input px of a bar next to the picture where brighter pixels do not count:
+#: Input px of a bar next to the picture where content does not count:
 #: a codec's blocks (8-16 px) ring, and its half-resolution colour bleeds,
 #: across the picture's edge into the bar.
 BLEED_PX = 16
@@ -51,6 +51,9 @@ FLAT_SHARE = 0.1
 #: share of the picture's detail: twice the bar's own limit, so that a
 #: blurred panel near that limit stays a bar.
 LIT_SHARE = 2 * FLAT_SHARE
+#: A frame whose picture has less detail than this (its 90th-percentile
+#: column, grey levels) says nothing of its bars: a fade, a cut to black.
+MIN_DETAIL = 1.0
 
 
 @dataclass(frozen=True)
@@ -137,8 +140,8 @@ class PictureArea:
 
     ``update`` returns None while every frame so far is dark or has no bar
     (the whole frame is measured), else the :class:`Picture`. Once a frame
-    without bars is seen no frame is inspected again; with bars, only the
-    bars are (a thin slice of the frame).
+    without bars is seen no frame is inspected again; with bars, each frame
+    is, sampled to :data:`DETAIL_SIDE`.
     """
 
     def __init__(self, limit: int = BAR_LIMIT) -> None:
@@ -194,8 +197,10 @@ class PictureArea:
         h, w = frame.shape[:2]
         x0, y0, x1, y1 = self._bounds
         cols, rows = detail_profiles(frame)
-        lit = LIT_SHARE * float(np.percentile(cols[x0:x1], 90))
-        m = BLEED_PX
+        detail = float(np.percentile(cols[x0:x1], 90))
+        if detail < MIN_DETAIL:
+            return self._bounds
+        lit, m = LIT_SHARE * detail, BLEED_PX
         bands = (cols[: max(x0 - m, 0)], cols[x1 + m :], rows[: max(y0 - m, 0)], rows[y1 + m :])
         if not any(band.size and band.max() > lit for band in bands):
             return self._bounds
@@ -232,7 +237,7 @@ def _bars_kept(bounds, width: int, height: int) -> tuple[int, int, int, int]:
 
 
 def _pair(before: int, after: int, side: int) -> tuple[int, int]:
-    """Two dark bands' thicknesses kept as bars, or both 0."""
+    """Two bands' thicknesses kept as bars, or both 0."""
     if min(before, after) < MIN_BAR_SHARE * side or abs(before - after) > BLEED_PX:
         return 0, 0
     return before, after
