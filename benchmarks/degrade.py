@@ -23,6 +23,11 @@ region is a false alarm) are written into ``OUT`` with
 * ``--blurred-sides``: with ``--pillarbox``, the bars filled as social
   media fill them: the frame enlarged to the whole width, blurred (a
   Gaussian of 5 % of the width) and darkened, moving with the video;
+* ``--hood F``: a part of the vehicle fixed in the view, as a dashcam or a
+  bike's action camera sees its bonnet or handlebars: the bottom ``F`` of
+  the height, under a curved edge, shows the same textured, darkened image
+  on every frame (the clip's first frame, mirrored); the ground truth marks
+  it static;
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -98,6 +103,28 @@ def bars(
     return out
 
 
+@functools.lru_cache(maxsize=4)
+def hood_mask(width: int, height: int, share: float) -> np.ndarray:
+    """Bool (height, width): the bottom ``share`` of the frame under an arc
+    that rises by a further ``share / 2`` at the middle (a bonnet's edge)."""
+    xs = np.linspace(-1.0, 1.0, width)[None, :]
+    ys = np.arange(height)[:, None] / height
+    return ys >= 1.0 - share * (1.0 + 0.5 * (1.0 - xs**2))
+
+
+def hooded(image: np.ndarray, first: np.ndarray, share: float) -> np.ndarray:
+    """``image`` with the bottom ``share`` covered by ``first`` mirrored
+    left-right and up-down, at 60 % brightness: fixed to the camera."""
+    if share <= 0:
+        return image
+    h, w = image.shape[:2]
+    part = (first[::-1, ::-1].astype(np.float32) * 0.6).astype(image.dtype)
+    out = image.copy()
+    mask = hood_mask(w, h, share)
+    out[mask] = part[mask]
+    return out
+
+
 def degraded(
     image: np.ndarray, t: int, noise: float, exposure: float, rng, distortion: float = 0.0,
     overlay: bool = False, letterbox: float = 0.0, pillarbox: float = 0.0,
@@ -119,9 +146,11 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
     target.mkdir(parents=True, exist_ok=True)
     for t, path in enumerate(frames):
         image = cv2.imread(str(path))
+        if t == 0:
+            first = image.copy()
         image = degraded(
-            image, t, args.noise, args.exposure, rng, args.distortion, args.overlay,
-            args.letterbox, args.pillarbox, args.blurred_sides,
+            hooded(image, first, args.hood), t, args.noise, args.exposure, rng,
+            args.distortion, args.overlay, args.letterbox, args.pillarbox, args.blurred_sides,
         )  # fmt: skip
         cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
@@ -132,13 +161,17 @@ def _truth(source: Path, target: Path, args: argparse.Namespace) -> None:
     if target.exists():
         return
     target.parent.mkdir(parents=True, exist_ok=True)
-    changed = args.distortion != 0 or args.letterbox > 0 or args.pillarbox > 0
+    changed = args.distortion != 0 or args.letterbox > 0 or args.pillarbox > 0 or args.hood > 0
     if not changed or not source.is_dir():
         target.symlink_to(source.resolve())
         return
     target.mkdir()
     for mask in sorted(source.glob("*.png")):
-        image = _lens(cv2.imread(str(mask), cv2.IMREAD_UNCHANGED), args.distortion, nearest=True)
+        image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
+        if args.hood > 0:
+            image = image.copy()
+            image[hood_mask(image.shape[1], image.shape[0], args.hood)] = 0
+        image = _lens(image, args.distortion, nearest=True)
         cv2.imwrite(str(target / mask.name), bars(image, args.letterbox, args.pillarbox))
 
 
@@ -152,11 +185,12 @@ def main() -> None:
     parser.add_argument("--letterbox", type=float, default=0.0, help="bar height, 0-0.5")
     parser.add_argument("--pillarbox", type=float, default=0.0, help="bar width, 0-0.5")
     parser.add_argument("--blurred-sides", action="store_true", help="fill the side bars")
+    parser.add_argument("--hood", type=float, default=0.0, help="camera-fixed share, 0-0.5")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
         parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")
-    if not (0 <= args.letterbox <= 0.5 and 0 <= args.pillarbox <= 0.5):
-        parser.error("--letterbox and --pillarbox must be in [0, 0.5]")
+    if not (0 <= args.letterbox <= 0.5 and 0 <= args.pillarbox <= 0.5 and 0 <= args.hood <= 0.5):
+        parser.error("--letterbox, --pillarbox and --hood must be in [0, 0.5]")
     clips = [(im, truth, args.out / group / im.parent.name) for im, truth, group in moving_clips()]
     fox = SHARED_DATA / "fox"
     if (fox / "images").is_dir():
