@@ -266,9 +266,10 @@ class MotionDetector:
         for out in outputs.values():
             union |= out.mask
         self._history.update(flow, fit)
-        self._rigid.update(flow, fit, self.ray_config.tolerance(fit.noise_px, fit.spread_px))
+        tolerance = self.ray_config.tolerance(fit.noise_px, fit.spread_px)
+        self._rigid.update(flow, fit, tolerance)
         track = self.tracker.config
-        overlay = self._overlay.update(flow, fit)
+        overlay = self._overlay.update(flow, fit, tolerance)
         if overlay is not None and union.any():
             union = without_overlay(union, overlay, flow.patch_px)
         unlike = self._remembered(flow, fit, union)

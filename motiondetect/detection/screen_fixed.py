@@ -13,10 +13,16 @@ camera's motion changes the image; an overlay does, on every frame. Each
 work pixel keeps the grey level it showed when it last changed (its
 reference) and a score:
 
-* **+1** on a frame where the fitted plane predicts a change there (the
-  plane difference, ``|I_t - H(I_{t-1})|``, beyond :data:`EVIDENCE_SIGMAS`
-  of the frame's difference noise) and the pixel still shows its reference
-  (within :data:`STILL_SIGMAS`);
+* **+1** on a frame where the pixel still shows its reference (within
+  :data:`STILL_SIGMAS`) while the fitted plane would have changed it: either
+  the plane difference, ``|I_t - H(I_{t-1})|``, is beyond
+  :data:`EVIDENCE_SIGMAS` of the frame's difference noise (high-contrast
+  content: a caption's white strokes outlined in black), or the measured
+  velocity is zero within :data:`STILL_PX` where the plane moves the scene
+  by more than the constraint ray's tolerance (textured content of any
+  contrast: a dashboard, a bonnet; on a textured scene in motion the
+  difference noise is 7-14 grey levels, more than a dim texture shifted by
+  a few pixels changes by);
 * **-**:data:`CHANGE_PENALTY` on a frame where it does not show its
   reference, which then becomes the grey level it shows;
 * unchanged otherwise (a still camera, or plain texture that no motion
@@ -31,9 +37,9 @@ that the camera follows drifts or deforms away from it and keeps a low
 score; a clock's digit changes once a second and costs only
 :data:`CHANGE_PENALTY` of a score that grows by one a frame.
 
-Blind spot: a mover the camera keeps on the same pixels, unchanged in
-look, for ``frames`` frames of a moving view is screen-fixed by any
-measure, and is taken out as an overlay would be
+Blind spot: a mover the camera keeps on the same pixels (its velocity
+within :data:`STILL_PX` of zero), unchanged in look, for ``frames``
+frames of a moving view is screen-fixed by any measure, and is taken out as an overlay would be
 (``tests/test_screen_fixed.py``). The default, 30 frames (1 s at 30 fps),
 is long for a camera to follow a mover to the pixel; docs/detectors.md
 measures it.
@@ -46,7 +52,7 @@ import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
 from motiondetect.detection.regions import components, without_frame_edge
-from motiondetect.measurement.dense_flow import VelocityField
+from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 #: Plane difference, in difference-noise sigmas, beyond which the camera's
 #: motion predicts a change at a pixel (the same 5 sigmas as the ray's tolerance).
@@ -54,6 +60,11 @@ EVIDENCE_SIGMAS = 5.0
 #: Distance from the reference, in difference-noise sigmas, within which a
 #: pixel still shows it (an overlay's pixels change by sensor noise only).
 STILL_SIGMAS = 2.0
+#: Speed within which a measured velocity is zero, work px/frame: DIS's
+#: error on textured sub-pixel motion (docs/detectors.md). A mover that the
+#: camera follows drifts by more on most frames (DAVIS car-roundabout's car:
+#: a median of 0.3-1.5 px/frame).
+STILL_PX = 0.1
 #: Score lost on a frame where a pixel changes.
 CHANGE_PENALTY = 5
 #: Smallest group of fixed pixels that counts as an overlay, work px.
@@ -83,9 +94,12 @@ class ScreenFixed:
         self._fixed: np.ndarray | None = None  # (h, w) bool: what _overlay was made of
         self._overlay: np.ndarray | None = None  # remade only when _fixed changes
 
-    def update(self, field: VelocityField, fit: CameraFit) -> np.ndarray | None:
+    def update(
+        self, field: VelocityField, fit: CameraFit, tolerance_px: float
+    ) -> np.ndarray | None:
         """Score this frame and return the overlay, (h, w) bool work pixels;
-        None while nothing is fixed (or when off)."""
+        None while nothing is fixed (or when off). ``tolerance_px``: the
+        constraint ray's tolerance on this frame, work px/frame."""
         if self.frames <= 0:
             return None
         grey = field.grey
@@ -97,7 +111,13 @@ class ScreenFixed:
             return self._overlay
         sigma = fit.difference_sigma()
         changed = cv2.absdiff(grey, self._reference) > STILL_SIGMAS * sigma
-        evidence = ~changed & (fit.plane_difference > EVIDENCE_SIGMAS * sigma)
+        evidence = fit.plane_difference > EVIDENCE_SIGMAS * sigma
+        if fit.residual_px is not None:
+            # Where |v| <= STILL_PX the plane's speed |v - r| is within
+            # STILL_PX of |r|, so the shared residual length bounds it.
+            still = vector_length(field.velocity_px) <= STILL_PX
+            evidence |= still & (fit.residual_length() > tolerance_px + STILL_PX)
+        evidence &= ~changed
         # Where content enters, the plane difference compares with nothing
         # seen; the detectors do not test there either.
         evidence = without_frame_edge(evidence, fit.edge_band_px)
@@ -129,13 +149,16 @@ def without_overlay(flagged: np.ndarray, overlay: np.ndarray, radius_px: int) ->
 
     The flow within ``radius_px`` of an overlay mixes its zero velocity
     with the scene's (DIS's patches straddle it), so that band is cleared;
-    and a flagged group lying mostly in the band is the overlay's too (its
-    fringe, where the mixed flow spread further), so it goes whole. A mover
+    and a flagged group lying mostly in the band (the overlay's own pixels
+    not counted) is the overlay's too (its fringe, where the mixed flow
+    spread further), so it goes whole. A mover
     crossing the band keeps what lies outside it.
     """
     size = 2 * radius_px + 1
     band = cv2.dilate(overlay.view(np.uint8), np.ones((size, size), np.uint8)) > 0
-    count, labels = components(flagged)
+    # The overlay's own flags are not weighed: a large one (a bonnet) would
+    # make a mover whose flags touch it a group mostly in the band.
+    count, labels = components(flagged & ~overlay)
     inside = np.bincount(labels[band], minlength=count)
     total = np.bincount(labels.ravel(), minlength=count)
     drop = 2 * inside >= total
