@@ -1,4 +1,4 @@
-"""Content fixed to the screen while the camera moves: burnt-in captions and logos.
+"""Content fixed to the screen while the camera moves: captions, logos, the vehicle's parts.
 
 A dashcam's date and clock, a drone's telemetry, a broadcaster's logo or a
 stock-footage watermark stay on the same pixels while the view behind them
@@ -22,7 +22,11 @@ reference) and a score:
   by more than the constraint ray's tolerance (textured content of any
   contrast: a dashboard, a bonnet; on a textured scene in motion the
   difference noise is 7-14 grey levels, more than a dim texture shifted by
-  a few pixels changes by);
+  a few pixels changes by); on velocity evidence, **+1 more** for each
+  tolerance by which the plane's motion there changed since the last frame
+  (up to :data:`CHANGE_PENALTY` more): a jolt of a handheld or vehicle
+  camera moves every world point, and a mover the camera follows with it,
+  while what is fixed to the camera stays;
 * **-**:data:`CHANGE_PENALTY` on a frame where it does not show its
   reference, which then becomes the grey level it shows;
 * unchanged otherwise (a still camera, or plain texture that no motion
@@ -39,10 +43,10 @@ score; a clock's digit changes once a second and costs only
 
 Blind spot: a mover the camera keeps on the same pixels (its velocity
 within :data:`STILL_PX` of zero), unchanged in look, for ``frames``
-frames of a moving view is screen-fixed by any measure, and is taken out as an overlay would be
-(``tests/test_screen_fixed.py``). The default, 30 frames (1 s at 30 fps),
-is long for a camera to follow a mover to the pixel; docs/detectors.md
-measures it.
+frames of a smoothly moving view is screen-fixed by any measure, and is
+taken out as an overlay would be (``tests/test_screen_fixed.py``). The
+default, 30 frames (1 s at 30 fps), is long for a camera to follow a mover
+to the pixel; docs/detectors.md measures it.
 """
 
 from __future__ import annotations
@@ -89,6 +93,7 @@ class ScreenFixed:
         self.reset()
 
     def reset(self) -> None:
+        self._last_residual: np.ndarray | None = None  # (h, w, 2): the last judged frame's
         self._reference: np.ndarray | None = None  # (h, w) uint8
         self._score: np.ndarray | None = None  # (h, w) int32: any ``frames`` fits
         self._fixed: np.ndarray | None = None  # (h, w) bool: what _overlay was made of
@@ -106,23 +111,32 @@ class ScreenFixed:
         if self._reference is None or self._reference.shape != grey.shape:
             self._reference = field.previous_grey.copy()
             self._score = np.zeros(grey.shape, np.int32)
-            self._fixed = self._overlay = None
-        if not fit.reliable or fit.plane_difference is None:
+            self._fixed = self._overlay = self._last_residual = None
+        residual = fit.residual_px
+        if not fit.reliable or fit.plane_difference is None or residual is None:
+            self._last_residual = None  # the next plane is compared with none
             return self._overlay
         sigma = fit.difference_sigma()
         changed = cv2.absdiff(grey, self._reference) > STILL_SIGMAS * sigma
-        evidence = fit.plane_difference > EVIDENCE_SIGMAS * sigma
-        if fit.residual_px is not None:
-            # Where |v| <= STILL_PX the plane's speed |v - r| is within
-            # STILL_PX of |r|, so the shared residual length bounds it.
-            still = vector_length(field.velocity_px) <= STILL_PX
-            evidence |= still & (fit.residual_length() > tolerance_px + STILL_PX)
+        # Where |v| <= STILL_PX the plane's velocity, v - r, is within
+        # STILL_PX of -r, so the shared residual length bounds its speed.
+        still = vector_length(field.velocity_px) <= STILL_PX
+        still &= fit.residual_length() > tolerance_px + STILL_PX
+        evidence = (fit.plane_difference > EVIDENCE_SIGMAS * sigma) | still
         evidence &= ~changed
         # Where content enters, the plane difference compares with nothing
         # seen; the detectors do not test there either.
         evidence = without_frame_edge(evidence, fit.edge_band_px)
         score = self._score  # whole-array arithmetic: masks would cost 20x more
         score += evidence.view(np.uint8)
+        if self._last_residual is not None:
+            # At a still pixel the change of -r is the change of the plane's
+            # velocity. Such pixels are few but where something is fixed.
+            ys, xs = np.nonzero(evidence & still)
+            change = residual[ys, xs] - self._last_residual[ys, xs]
+            jolt = np.sqrt(np.einsum("ij,ij->i", change, change)) / tolerance_px
+            score[ys, xs] += np.minimum(jolt, CHANGE_PENALTY).astype(np.int32)
+        self._last_residual = residual
         score -= changed.view(np.uint8) * np.uint8(CHANGE_PENALTY)
         np.clip(score, 0, 2 * self.frames, out=score)
         np.copyto(self._reference, grey, where=changed)
@@ -149,9 +163,13 @@ def without_overlay(flagged: np.ndarray, overlay: np.ndarray, radius_px: int) ->
 
     The flow within ``radius_px`` of an overlay mixes its zero velocity
     with the scene's (DIS's patches straddle it), so that band is cleared;
-    and a flagged group lying mostly in the band (the overlay's own pixels
-    not counted) is the overlay's too (its fringe, where the mixed flow
-    spread further), so it goes whole. A mover
+    and a flagged group whose part outside the band is no larger than its
+    flagged part of the band within ``radius_px`` of that part is the
+    overlay's too (its fringe, grown up to about ``radius_px`` beyond the
+    band where the mixed flow spread further), so it goes whole. The test
+    is local: a large overlay (a bonnet) flags a band far longer than a
+    mover touching it, and a group mostly in the band as a whole would take
+    the mover with it. A mover
     crossing the band keeps what lies outside it.
     """
     size = 2 * radius_px + 1
@@ -159,8 +177,9 @@ def without_overlay(flagged: np.ndarray, overlay: np.ndarray, radius_px: int) ->
     # The overlay's own flags are not weighed: a large one (a bonnet) would
     # make a mover whose flags touch it a group mostly in the band.
     count, labels = components(flagged & ~overlay)
-    inside = np.bincount(labels[band], minlength=count)
-    total = np.bincount(labels.ravel(), minlength=count)
-    drop = 2 * inside >= total
+    outside = flagged & ~band
+    near = cv2.dilate(outside.view(np.uint8), np.ones((size, size), np.uint8)) > 0
+    inside = np.bincount(labels[band & near], minlength=count)
+    drop = inside >= np.bincount(labels[outside], minlength=count)
     drop[0] = True  # the background stays unflagged
     return ~drop.take(labels) & ~band
