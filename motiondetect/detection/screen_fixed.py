@@ -169,13 +169,12 @@ def without_overlay(flagged: np.ndarray, overlay: np.ndarray, radius_px: int) ->
     band where the mixed flow spread further), so it goes whole. The test
     is local: a large overlay (a bonnet) flags a band far longer than a
     mover touching it, and a group mostly in the band as a whole would take
-    the mover with it. A mover
-    crossing the band keeps what lies outside it.
+    the mover with it. A mover crossing the band keeps what lies outside it.
     """
     size = 2 * radius_px + 1
     band = cv2.dilate(overlay.view(np.uint8), np.ones((size, size), np.uint8)) > 0
-    # The overlay's own flags are not weighed: a large one (a bonnet) would
-    # make a mover whose flags touch it a group mostly in the band.
+    # The overlay's own pixels belong to no group (label 0): through a large
+    # one (a bonnet) every mover touching it would be one group.
     count, labels = components(flagged & ~overlay)
     outside = flagged & ~band
     near = cv2.dilate(outside.view(np.uint8), np.ones((size, size), np.uint8)) > 0
