@@ -112,15 +112,18 @@ def hood_mask(width: int, height: int, share: float) -> np.ndarray:
     return ys >= 1.0 - share * (1.0 + 0.5 * (1.0 - xs**2))
 
 
-def hooded(image: np.ndarray, first: np.ndarray, share: float) -> np.ndarray:
-    """``image`` with the bottom ``share`` covered by ``first`` mirrored
-    left-right and up-down, at 60 % brightness: fixed to the camera."""
+def dashboard(first: np.ndarray) -> np.ndarray:
+    """What the part of the vehicle shows: ``first`` mirrored left-right and
+    up-down, at 60 % brightness."""
+    return (first[::-1, ::-1].astype(np.float32) * 0.6).astype(first.dtype)
+
+
+def hooded(image: np.ndarray, part: np.ndarray, share: float) -> np.ndarray:
+    """``image`` with its bottom ``share`` (:func:`hood_mask`) showing ``part``."""
     if share <= 0:
         return image
-    h, w = image.shape[:2]
-    part = (first[::-1, ::-1].astype(np.float32) * 0.6).astype(image.dtype)
     out = image.copy()
-    mask = hood_mask(w, h, share)
+    mask = hood_mask(image.shape[1], image.shape[0], share)
     out[mask] = part[mask]
     return out
 
@@ -147,9 +150,9 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
     for t, path in enumerate(frames):
         image = cv2.imread(str(path))
         if t == 0:
-            first = image.copy()
+            part = dashboard(image)
         image = degraded(
-            hooded(image, first, args.hood), t, args.noise, args.exposure, rng,
+            hooded(image, part, args.hood), t, args.noise, args.exposure, rng,
             args.distortion, args.overlay, args.letterbox, args.pillarbox, args.blurred_sides,
         )  # fmt: skip
         cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])

@@ -159,31 +159,23 @@ def test_fox_near_rigid_head_is_dropped_over_time():
     assert counts[0] <= 0.6 * counts[1]
 
 
-def _bonnet(height: int, width: int) -> np.ndarray:
-    """Bool (height, width): the bottom 12 % of the frame under an arc rising
-    to 18 % at the middle, as ``benchmarks/degrade.py --hood 0.12`` draws it."""
-    xs = np.linspace(-1.0, 1.0, width)[None, :]
-    ys = np.arange(height)[:, None] / height
-    return ys >= 1.0 - 0.12 * (1.0 + 0.5 * (1.0 - xs**2))
-
-
 def test_a_part_of_the_vehicle_in_view_is_taken_out_on_a_real_pan():
-    """DAVIS dog with a dashboard in view: the bottom of the frame covered on
-    every frame by the first frame's texture, mirrored and darkened to 60 %.
+    """DAVIS dog with a dashboard in view: the bottom 15 % of the frame covered
+    on every frame by the first frame's texture, mirrored and darkened to 60 %.
     Its plane difference stays under 5 sigmas of the moving scene's
     difference noise (7-10 grey levels here), so only its measured velocity,
     zero within 0.1 px, is evidence, counting more on frames where the
     handheld camera jolts. Measured: flags more than 20 px inside it on
-    frames 2-8, none from frame 9 on (from frame 31 without the jolts'
+    frames 2-7, none from frame 8 on (from frame 31 without the jolts'
     weight; without the velocity evidence, on 26 of the 29 frames after
-    frame 30). The dog stays found: on 57 of the 58 judged frames (frame
-    21: its flags join the bonnet's fringe, and go with it)."""
+    frame 30). The dog is found on every judged frame."""
     detector = MotionDetector("both")
     inside, missed = [], 0
     with open_source(shared_path("davis", "dog", "JPEGImages")) as frames:
         for frame in frames:
             height, width = frame.image.shape[:2]
-            covered = _bonnet(height, width)
+            covered = np.zeros((height, width), bool)
+            covered[round(0.85 * height) :] = True
             if frame.index == 0:
                 dashboard = (frame.image[::-1, ::-1] * 0.6).astype(np.uint8)
                 deep = cv2.erode(covered.view(np.uint8), np.ones((41, 41), np.uint8)) > 0
@@ -191,6 +183,6 @@ def test_a_part_of_the_vehicle_in_view_is_taken_out_on_a_real_pan():
             result = detector.process(image, frame.index, frame.time_s)
             inside.append(bool(((result.input_mask(width, height) > 0) & deep).any()))
             missed += frame.index >= 2 and not result.regions
-    assert all(inside[2:9])  # the problem, while the evidence builds up
+    assert all(inside[2:8])  # the problem, while the evidence builds up
     assert not any(inside[12:])
-    assert missed <= 2
+    assert missed == 0
