@@ -134,7 +134,7 @@ class ScreenFixed:
             # velocity. Such pixels are few but where something is fixed.
             ys, xs = np.nonzero(evidence & still)
             change = residual[ys, xs] - self._last_residual[ys, xs]
-            jolt = np.sqrt(np.einsum("ij,ij->i", change, change)) / tolerance_px
+            jolt = vector_length(change) / tolerance_px
             score[ys, xs] += np.minimum(jolt, CHANGE_PENALTY).astype(np.int32)
         self._last_residual = residual
         score -= changed.view(np.uint8) * np.uint8(CHANGE_PENALTY)
