@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import resource
+import tempfile
 import time
 from pathlib import Path
 
@@ -15,6 +16,12 @@ from skimage import data
 #: (the same rule as tests/conftest.py).
 SHARED_DATA = Path(
     os.environ.get("MOTIONDETECT_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data"
+)
+
+#: Fresh synthetic scenes (``synth_set.py``): $MOTIONDETECT_SYNTH, else a
+#: folder in the system's temporary directory (never the checkout).
+SYNTH_SET = Path(
+    os.environ.get("MOTIONDETECT_SYNTH") or Path(tempfile.gettempdir()) / "motiondetect-synth-set"
 )
 
 

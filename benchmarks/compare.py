@@ -26,7 +26,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from common import SHARED_DATA
+from common import SHARED_DATA, SYNTH_SET
 
 from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.detection.detector import MotionDetector
@@ -157,9 +157,16 @@ class Ours:
         return self.held
 
 
-def sequences(quick: bool) -> list[tuple[str, Path, Path | None, Path | None]]:
-    """(name, frames source, ground-truth folder or None, ego-motion file or None)."""
+def sequences(quick: bool, synth: bool = False) -> list[tuple[str, Path, Path | None, Path | None]]:
+    """(name, frames source, ground-truth folder or None, ego-motion file or None);
+    with ``synth``, also the rendered scenes of ``synth_set.py``
+    (``synth-rigid/...``, ``synth-movers/...``)."""
     out = []
+    if synth:
+        for scene in sorted(SYNTH_SET.glob("*/*/scene.json")):
+            folder = scene.parent
+            name = f"synth-{folder.parent.name}/{folder.name}"
+            out.append((name, folder / "video.mp4", folder, scene))
     for folder in sorted((ROOT / "sample_videos").iterdir()):
         if (folder / "video.mp4").exists():
             out.append(

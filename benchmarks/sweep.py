@@ -12,8 +12,10 @@ Each variant is a JSON object of config sections, named as in a config file
 every (n+1)-th frame and holds its mask on the others (``--frame-skip``), and ``"peer"`` runs one
 of ``compare.py``'s peers instead (``DenseResidual``, ``Mog2``, ...). Data sets
 are the prefixes of ``compare.py``'s sequence names: ``sample``, ``davis``,
-``ucsd``, ``sbi``, ``otb``, ``fox``. Scoring is ``compare.py``'s, frames 0-1
-unscored; sequences run in parallel (``--jobs``), one OpenCV thread each.
+``ucsd``, ``sbi``, ``otb``, ``fox``, and the fresh renders of
+``benchmarks/synth_set.py``, ``synth-rigid`` and ``synth-movers``. Scoring
+is ``compare.py``'s, frames 0-1 unscored; sequences run in parallel
+(``--jobs``), one OpenCV thread each.
 Set ``MOTIONDETECT_DATA`` to score another copy of the clips (for example
 every 2nd frame, from ``benchmarks/subsample.py``, or through H.264 from
 ``benchmarks/recompress.py``).
@@ -72,7 +74,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("datasets", help="comma-separated: sample,davis,ucsd,sbi,otb,fox")
+    parser.add_argument(
+        "datasets",
+        help="comma-separated: sample,davis,ucsd,sbi,otb,fox,synth-rigid,synth-movers",
+    )
     parser.add_argument("variants", help="JSON object: variant name -> config sections")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--per-sequence", action="store_true")
@@ -86,7 +91,7 @@ def main() -> None:
     groups = args.datasets.split(",")
     jobs = [
         (name, source, gt, variants)
-        for name, source, gt, _ in compare.sequences(quick=False)
+        for name, source, gt, _ in compare.sequences(quick=False, synth="synth" in args.datasets)
         if any(name.startswith(g) for g in groups)
     ]
     with Pool(args.jobs) as pool:
