@@ -16,10 +16,18 @@ velocity is known at every pixel. Two candidates (issue 13, item 1):
 
 Prints the median and 90th-percentile error (px/frame), the median error as a
 share of the speed, and the share of regions (or pixels) with an answer.
+
+    python benchmarks/velocity_accuracy.py --border
+
+DIS's error by distance from the frame's border, in DIS patches
+(``VelocityField.patch_px``), every pixel counted: the source of
+``VelocityRayConfig.edge_error_ratio``.
 Their speed is measured by ``benchmarks/throughput.py`` and ``benchmarks/stages.py``.
 """
 
 from __future__ import annotations
+
+import sys
 
 import cv2
 import numpy as np
@@ -114,8 +122,45 @@ def row(label: str, median_speed: float, err: np.ndarray) -> str:
     )
 
 
+#: Distance bands from the border, in DIS patches; the last is the inside.
+BANDS = ((0.0, 0.5), (0.5, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 3.0), (3.0, None))
+
+
+def border_errors(kind: str, amount: float, frames: int = 4) -> list[float]:
+    """DIS's median error in each of :data:`BANDS`, px/frame."""
+    flow = DenseFlow()
+    for t in range(frames):
+        field = flow.process(frame(kind, amount, t))
+    truth = true_velocity(kind, amount, frames - 1)
+    err = np.hypot(*(field.velocity_px - truth).transpose(2, 0, 1))
+    yy, xx = np.mgrid[0:SIZE, 0:SIZE]
+    patches = np.minimum(np.minimum(yy, SIZE - 1 - yy), np.minimum(xx, SIZE - 1 - xx))
+    patches = patches / field.patch_px
+    return [
+        float(np.median(err[(patches >= lo) & ((patches < hi) if hi else True)]))
+        for lo, hi in BANDS
+    ]
+
+
+def border_table() -> None:
+    names = [f"{lo:g}-{hi:g}" if hi else f"{lo:g}+" for lo, hi in BANDS]
+    print("| motion | " + " | ".join(names) + " | ratio within 1 patch |")
+    print("|---|" + "---|" * (len(BANDS) + 1))
+    for kind, amount, label in MOTIONS:
+        if kind == "translation" and amount > 7.5:
+            continue  # past the band (section above): errors of another kind
+        med = border_errors(kind, amount)
+        inside = med[-1]
+        ratio = float(np.median(med[:2])) / inside if inside else float("nan")
+        cells = " | ".join(f"{m:.3f}" for m in med)
+        print(f"| {label} | {cells} | {ratio:.1f} |", flush=True)
+
+
 def main() -> None:
     cv2.setNumThreads(1)
+    if "--border" in sys.argv[1:]:
+        border_table()
+        return
     header = [
         "| motion | median speed (px/frame) | median error | 90th pct error "
         "| median error / speed | answered |",

@@ -39,3 +39,10 @@ def test_configs_reject_out_of_range_values(cls, positive, non_negative, choice)
     if choice:
         with pytest.raises(ValueError, match=choice[0]):
             cls(**{choice[0]: choice[1]})
+
+
+def test_the_edge_error_ratio_is_at_least_one():
+    VelocityRayConfig(edge_error_ratio=1.0)  # off
+    for bad in (0.5, 0, -2, math.nan, "big", True):
+        with pytest.raises(ValueError, match="edge_error_ratio"):
+            VelocityRayConfig(edge_error_ratio=bad)

@@ -457,9 +457,10 @@ def _terrain(t: int, speed: float = 3.0) -> np.ndarray:
 
 def _terrain_run(spread_sigmas: float, mover: bool) -> tuple[float, float]:
     """(share of frames with the mover half flagged, false-alarm regions per frame)."""
-    # The aperture gate, added later, also removes some of this parallax: off,
-    # to measure the spread term alone.
-    ray, fit = VelocityRayConfig(spread_sigmas=spread_sigmas), FitConfig(aperture_noise=0.0)
+    # The aperture gate and the discount next to the frame edge, added later,
+    # also remove some of this parallax: off, to measure the spread term alone.
+    ray = VelocityRayConfig(spread_sigmas=spread_sigmas, edge_error_ratio=1.0)
+    fit = FitConfig(aperture_noise=0.0)
     md = MotionDetector("both", ray, fit)
     hits, false_alarms = [], []
     for t in range(12):

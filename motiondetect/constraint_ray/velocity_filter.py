@@ -46,7 +46,12 @@ from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.constraint_ray.plane import residual_spread
 from motiondetect.detection.base import DetectorOutput
-from motiondetect.detection.regions import components, hysteresis, without_frame_edge
+from motiondetect.detection.regions import (
+    components,
+    discounted_near_edge,
+    hysteresis,
+    without_frame_edge,
+)
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 NAME = "velocity-ray"
@@ -98,6 +103,12 @@ class VelocityRayConfig:
         The slowest steady residual motion the summed test flags, work
         px/frame: its tolerance is ``slow_px / (1 - carry)`` (or the summed
         field's own spread, as for one frame).
+    edge_error_ratio : float
+        Within one DIS patch of the frame edge (``VelocityField.patch_px``)
+        the off-ray distance, one frame's and the summed, counts divided by
+        this: DIS's error there is about twice the inside's, measured on
+        motions with known answers (``benchmarks/velocity_accuracy.py
+        --border``). 1: off.
     """
 
     noise_sigmas: float = 3.0
@@ -110,6 +121,7 @@ class VelocityRayConfig:
     evidence_box: int = 5
     carry: float = 0.75
     slow_px: float = 0.6
+    edge_error_ratio: float = 2.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -121,6 +133,10 @@ class VelocityRayConfig:
             raise ValueError(f"carry must be below 1, but got {self.carry}")
         if self.grow_ratio > 1:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
+        ratio = self.edge_error_ratio
+        number = isinstance(ratio, (int, float)) and not isinstance(ratio, bool)
+        if not (number and ratio >= 1):  # NaN fails too
+            raise ValueError(f"edge_error_ratio must be at least 1, but got {ratio!r}")
 
     def tolerance(self, noise_px: float, spread_px: float, floor_px: float | None = None) -> float:
         """Largest distance of a rigid point off its ray, px/frame, from the
@@ -215,6 +231,7 @@ class VelocityRayDetector:
         # What entered the frame during that memory carries flow extrapolated
         # at the edge, so the band reaches as far as the view moved meanwhile.
         band = fit.edge_band_px + fit.median_speed_px * (memory - 1.0)
+        distance = discounted_near_edge(distance, field.patch_px, cfg.edge_error_ratio)
         return without_frame_edge(distance, band), tolerance
 
     def _slow_movers(
@@ -270,6 +287,7 @@ class VelocityRayDetector:
             self._carried = None
             return DetectorOutput.empty(field.shape, camera=fit)
         distance, tolerance, residual = self._off_ray(field, fit, known)
+        distance = discounted_near_edge(distance, field.patch_px, cfg.edge_error_ratio)
         distance = without_frame_edge(distance, fit.edge_band_px)
         seeds = distance > tolerance
         changed = None

@@ -174,3 +174,24 @@ def without_frame_edge(distance: np.ndarray, band_px: float) -> np.ndarray:
     out = distance.copy()
     out[:b], out[-b:], out[:, :b], out[:, -b:] = 0, 0, 0, 0
     return out
+
+
+def discounted_near_edge(distance: np.ndarray, band_px: float, ratio: float) -> np.ndarray:
+    """``distance`` divided by ``ratio`` within ``band_px`` of the frame edge.
+
+    Within one patch of the edge DIS's patches are cut by the border, and
+    its error there is about twice the inside's (median, on motions with
+    known answers: ``benchmarks/velocity_accuracy.py --border``), so a
+    residual there means half as much. A new array; ``ratio`` 1 returns
+    ``distance`` itself.
+    """
+    b = int(np.ceil(band_px))
+    if ratio == 1 or b <= 0:
+        return distance
+    out = distance.copy()
+    scale = np.float32(1.0 / ratio)
+    out[:b] *= scale
+    out[-b:] *= scale
+    out[b:-b, :b] *= scale
+    out[b:-b, -b:] *= scale
+    return out
