@@ -16,13 +16,13 @@ velocity is known at every pixel. Two candidates (issue 13, item 1):
 
 Prints the median and 90th-percentile error (px/frame), the median error as a
 share of the speed, and the share of regions (or pixels) with an answer.
+Their speed is measured by ``benchmarks/throughput.py`` and ``benchmarks/stages.py``.
 
     python benchmarks/velocity_accuracy.py --border
 
-DIS's error by distance from the frame's border, in DIS patches
+DIS's median error by distance from the frame's border, in DIS patches
 (``VelocityField.patch_px``), every pixel counted: the source of
 ``VelocityRayConfig.edge_error_ratio``.
-Their speed is measured by ``benchmarks/throughput.py`` and ``benchmarks/stages.py``.
 """
 
 from __future__ import annotations

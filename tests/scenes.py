@@ -76,6 +76,19 @@ def object_hits(results, frames, mover: int = 1):
     return out
 
 
+def found_and_stray(md: MotionDetector, frames) -> tuple[int, int]:
+    """Run ``md`` over rendered frames: (frames with a reported region on a
+    mover, regions touching no mover pixel)."""
+    found = stray = 0
+    for fr in frames:
+        res = md.process(fr.image, fr.index, fr.index / 30)
+        mover = fr.mask == 255
+        hits = [mover[y : y + h, x : x + w].any() for x, y, w, h in (r.bbox for r in res.regions)]
+        found += any(hits)
+        stray += hits.count(False)
+    return found, stray
+
+
 def near_reversal(index: int, period: int) -> bool:
     """Within 1.5 frames of an extreme of x = sin(2 pi t / period), where an
     ``animate`` mover reverses and its acceleration peaks."""

@@ -14,6 +14,8 @@ from motiondetect.detection.regions import discounted_near_edge
 from motiondetect.measurement.dense_flow import DenseFlow
 from motiondetect.tools.synth import SynthConfig, render_frames
 
+from .scenes import found_and_stray
+
 
 def test_the_distance_is_discounted_within_the_band_only():
     distance = np.full((40, 50), 3.0, np.float32)
@@ -58,15 +60,7 @@ def test_dis_errs_about_twice_as_much_within_one_patch_of_the_border(shift, turn
 def _regions(frames, ratio: float) -> tuple[int, int]:
     """(frames with a region on a mover, regions touching no mover pixel)."""
     md = MotionDetector("both", VelocityRayConfig(edge_error_ratio=ratio))
-    on = off = 0
-    for f in frames:
-        result = md.process(f.image, f.index, f.index / 30)
-        mover = f.mask == 255
-        boxes = (r.bbox for r in result.regions)
-        hits = [mover[y : y + h, x : x + w].any() for x, y, w, h in boxes]
-        on += any(hits)
-        off += hits.count(False)
-    return on, off
+    return found_and_stray(md, frames)
 
 
 def test_a_rigid_scene_flags_less_at_its_border_and_a_mover_is_kept():

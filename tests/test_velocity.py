@@ -600,15 +600,10 @@ def _slow_mover_frames(
     frames, carry: float, floor_px: float = VelocityRayConfig.floor_px
 ) -> tuple[int, int]:
     """(frames with a region on the mover, regions touching no mover pixel)."""
-    md = MotionDetector("constraint-ray", VelocityRayConfig(carry=carry, floor_px=floor_px))
-    on, off = 0, 0
-    for fr in frames:
-        res = md.process(fr.image, fr.index, fr.index / 30)
-        mover = fr.mask == 255
-        hits = [mover[y : y + h, x : x + w].any() for x, y, w, h in (r.bbox for r in res.regions)]
-        on += any(hits)
-        off += hits.count(False)
-    return on, off
+    from .scenes import found_and_stray
+
+    ray = VelocityRayConfig(carry=carry, floor_px=floor_px)
+    return found_and_stray(MotionDetector("constraint-ray", ray), frames)
 
 
 def test_a_mover_too_slow_for_one_frame_is_found_by_the_summed_residual():

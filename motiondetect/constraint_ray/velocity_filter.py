@@ -126,17 +126,21 @@ class VelocityRayConfig:
     def __post_init__(self) -> None:
         check_fields(
             self,
-            positive=("noise_sigmas", "floor_px", "known_floor_px", "grow_ratio"),
+            positive=(
+                "noise_sigmas",
+                "floor_px",
+                "known_floor_px",
+                "grow_ratio",
+                "edge_error_ratio",
+            ),
             non_negative=("close_px", "spread_sigmas", "carry", "slow_px"),
         )
         if self.carry >= 1:
             raise ValueError(f"carry must be below 1, but got {self.carry}")
         if self.grow_ratio > 1:
             raise ValueError(f"grow_ratio must be at most 1, but got {self.grow_ratio}")
-        ratio = self.edge_error_ratio
-        number = isinstance(ratio, (int, float)) and not isinstance(ratio, bool)
-        if not (number and ratio >= 1):  # NaN fails too
-            raise ValueError(f"edge_error_ratio must be at least 1, but got {ratio!r}")
+        if self.edge_error_ratio < 1:
+            raise ValueError(f"edge_error_ratio must be at least 1, got {self.edge_error_ratio}")
 
     def tolerance(self, noise_px: float, spread_px: float, floor_px: float | None = None) -> float:
         """Largest distance of a rigid point off its ray, px/frame, from the
