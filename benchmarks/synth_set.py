@@ -15,7 +15,11 @@ a smooth and an animate mover (``synth-movers``).
 
 The scenes go to ``$MOTIONDETECT_SYNTH`` (default: a folder in the
 system's temporary directory), never into the checkout; each is rendered
-once and reused. ``compare.sequences(synth=True)`` lists them.
+once and reused. ``compare.sequences(synth=True)`` lists them. ``--world N``
+lays the rigid world out anew (``motiondetect synth --world-seed``); render
+it into a folder of its own and point ``$MOTIONDETECT_SYNTH`` there:
+
+    MOTIONDETECT_SYNTH=/tmp/synth-world3 python benchmarks/synth_set.py --world 3
 """
 
 from __future__ import annotations
@@ -39,15 +43,17 @@ FRAMES = 60
 SEEDS = {0.7: 107, 1.4: 114}
 
 
-def scenes() -> list[tuple[str, SynthConfig]]:
-    """(folder name under the set, what to render) for every scene of the set."""
+def scenes(world_seed: int = 0) -> list[tuple[str, SynthConfig]]:
+    """(folder name under the set, what to render) for every scene of the set,
+    in the world laid out by ``world_seed`` (0: the samples')."""
     out = []
     for kind, movers in (("rigid", ()), ("movers", MOVERS)):
         for camera in CAMERAS:
             for speed in SPEEDS:
                 config = SynthConfig(
-                    camera=camera, movers=movers, frames=FRAMES, speed=speed, seed=SEEDS[speed]
-                )
+                    camera=camera, movers=movers, frames=FRAMES, speed=speed,
+                    seed=SEEDS[speed], world_seed=world_seed,
+                )  # fmt: skip
                 out.append((f"{kind}/{camera}-x{speed}", config))
     return out
 
@@ -67,9 +73,12 @@ def main() -> None:
     )
     parser.add_argument("out", nargs="?", type=Path, default=SYNTH_SET)
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument(
+        "--world", type=int, default=0, help="world seed of every scene (0: the samples' world)"
+    )
     args = parser.parse_args()
     todo = []
-    for name, config in scenes():
+    for name, config in scenes(args.world):
         folder = args.out / name
         if not (folder / "scene.json").exists():
             folder.parent.mkdir(parents=True, exist_ok=True)

@@ -95,7 +95,16 @@ def info(inputs, as_json) -> None:
     help="Oscillation period of animate movers, frames.",
 )
 @click.option("--supersample", type=click.IntRange(1, 4), default=2, show_default=True)
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option(
+    "--seed", type=int, default=0, show_default=True, help="Of the sensor noise and the jitter."
+)
+@click.option(
+    "--world-seed",
+    type=click.IntRange(0, None),
+    default=0,
+    show_default=True,
+    help="Lay out the rigid world's boxes and near post anew; 0: the samples' world.",
+)
 def synth(
     output,
     camera,
@@ -110,6 +119,7 @@ def synth(
     period,
     supersample,
     seed,
+    world_seed,
 ) -> None:
     """Render a rigid 3-D scene seen by a moving camera, with ground truth."""
     from motiondetect.tools.synth import SynthConfig, write_sequence
@@ -128,6 +138,7 @@ def synth(
             period_frames=period,
             supersample=supersample,
             seed=seed,
+            world_seed=world_seed,
         )
         try:
             output.mkdir(parents=True, exist_ok=True)

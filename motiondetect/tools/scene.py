@@ -69,6 +69,9 @@ class SynthConfig:
         Per-frame rotational jitter (standard deviation), for ``jitter`` or
         added to any camera when ``jitter_deg > 0``.
     seed : int
+        Of the sensor noise and the jitter.
+    world_seed : int
+        The layout of the rigid world (:func:`world`); 0: the samples' world.
     """
 
     camera: str = "uniform"
@@ -84,6 +87,7 @@ class SynthConfig:
     period_frames: int = 20
     jitter_deg: float = 0.0
     seed: int = 0
+    world_seed: int = 0
 
     def __post_init__(self) -> None:
         if self.camera not in CAMERAS:
@@ -99,6 +103,8 @@ class SynthConfig:
             raise ValueError(f"frames must be at least 2, but got {self.frames}")
         if self.supersample < 1:
             raise ValueError(f"supersample must be at least 1, but got {self.supersample}")
+        if self.world_seed < 0:
+            raise ValueError(f"world_seed must not be negative, but got {self.world_seed}")
 
     @property
     def intrinsics(self) -> Intrinsics:
@@ -169,17 +175,45 @@ def _box(
     ]
 
 
-def world() -> list[Quad]:
-    """The rigid scene: wall at 25 m, ground, three boxes and a near post."""
+#: The default world's boxes: (centre x, depth, (width, height, depth), texture).
+_BOXES = (
+    (-3.0, 11.0, (2.5, 2.5, 2.0), 7),
+    (3.5, 8.0, (2.0, 3.0, 1.5), 6),
+    (0.8, 14.0, (1.6, 1.8, 1.6), 4),
+)
+#: The near post, for strong parallax.
+_POST = (-1.3, 3.2, (0.35, 3.5, 0.35), 2)
+
+
+def world(seed: int = 0) -> list[Quad]:
+    """The rigid scene: wall at 25 m, ground, three boxes and a near post.
+
+    ``seed`` 0 is the fixed world of the committed samples. Any other seed
+    moves each box by up to 1.5 m across and scales its depth by 0.8-1.25 and
+    its size by 0.75-1.3, gives the boxes other photographs, and moves the
+    post by up to 0.5 m across and to 2.8-4 m away: the same kinds of
+    surface and parallax, laid out anew.
+    """
     p = np.array
     quads = [
         Quad(p([-40.0, -20.0, 25.0]), p([80.0, 0, 0]), p([0, 20.0 + GROUND_Y, 0]), 0, 40.0),
         Quad(p([-40.0, GROUND_Y, 0.3]), p([80.0, 0, 0]), p([0, 0, 24.7]), 1, 60.0),
     ]
-    quads += _box(-3.0, 11.0, (2.5, 2.5, 2.0), 7, 150.0)
-    quads += _box(3.5, 8.0, (2.0, 3.0, 1.5), 6, 150.0)
-    quads += _box(0.8, 14.0, (1.6, 1.8, 1.6), 4, 150.0)
-    quads += _box(-1.3, 3.2, (0.35, 3.5, 0.35), 2, 300.0)  # the near post: strong parallax
+    boxes, post = list(_BOXES), _POST
+    if seed:
+        rng = np.random.default_rng(seed)
+        photos = rng.permutation([3, 4, 5, 6, 7])
+        boxes = [
+            (x + rng.uniform(-1.5, 1.5), z * rng.uniform(0.8, 1.25),
+             tuple(v * rng.uniform(0.75, 1.3) for v in size), int(photos[i]))
+            for i, (x, z, size, _) in enumerate(boxes)
+        ]  # fmt: skip
+        x, _, size, texture = post
+        post = (x + rng.uniform(-0.5, 0.5), rng.uniform(2.8, 4.0), size, texture)
+    for x, z, size, texture in boxes:
+        quads += _box(x, z, size, texture, 150.0)
+    x, z, size, texture = post
+    quads += _box(x, z, size, texture, 300.0)
     return quads
 
 

@@ -213,7 +213,7 @@ def render_frames(config: SynthConfig) -> Iterator[Frame]:
     rng = np.random.default_rng(config.seed)
     noise_rng = np.random.default_rng(config.seed + 1)
     renderer = Renderer(config)
-    rigid = world()
+    rigid = world(config.world_seed)
     size = (config.width, config.height)
     for t in range(config.frames):
         pose = camera_pose(config, t, rng)
@@ -260,6 +260,7 @@ def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4
             "fps": config.fps,
             "noise_grey": config.noise_grey,
             "seed": config.seed,
+            "world_seed": config.world_seed,
             "speed": config.speed,
             "period_frames": config.period_frames,
             "jitter_deg": config.jitter_deg,
