@@ -199,7 +199,7 @@ def world(seed: int = 0) -> list[Quad]:
         Quad(p([-40.0, -20.0, 25.0]), p([80.0, 0, 0]), p([0, 20.0 + GROUND_Y, 0]), 0, 40.0),
         Quad(p([-40.0, GROUND_Y, 0.3]), p([80.0, 0, 0]), p([0, 0, 24.7]), 1, 60.0),
     ]
-    boxes, post = list(_BOXES), _POST
+    boxes, post = _BOXES, _POST
     if seed:
         rng = np.random.default_rng(seed)
         photos = rng.permutation([3, 4, 5, 6, 7])
