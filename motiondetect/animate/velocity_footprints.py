@@ -27,6 +27,7 @@ frame it stops (the constraint ray filter still sees any motion it has).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -179,25 +180,35 @@ def interval_ratio(now_s: float, before_s: float) -> float:
 
 
 def violations(
-    field: VelocityField, residual: np.ndarray, moving: np.ndarray, previous: np.ndarray,
+    field: VelocityField, residual: np.ndarray, candidates: np.ndarray, previous: np.ndarray,
     tolerance: float, config: VelocityAnimateConfig,
+    moving_at: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> np.ndarray:  # fmt: skip
     """Where the velocity broke its smooth continuation, (h, w) bool.
 
-    Only the ``moving`` points are tested: those whose residual the image
-    determines exceeds ``tolerance`` (``CameraFit.determined_beyond``); see
-    the module doc.
+    Only the moving ``candidates`` are tested: those ``moving_at(ys, xs)``
+    accepts (the points whose residual the image determines exceeds
+    ``tolerance``, ``CameraFit.determined_beyond_at``; None: all); see the
+    module doc. It is asked only where its answer is used: at the tested
+    points, and at the candidates beside a violation.
     """
-    h, w = moving.shape
+    h, w = candidates.shape
     s = _TEST_STEP
-    ys, xs = np.nonzero(moving[::s, ::s])
+    ys, xs = np.nonzero(candidates[::s, ::s])
     coarse = np.zeros(((h + s - 1) // s, (w + s - 1) // s), np.uint8)
     if len(ys):
         ys, xs = ys * s, xs * s
+        if moving_at is not None:
+            moving = moving_at(ys, xs)
+            ys, xs = ys[moving], xs[moving]
+    if len(ys):
         source = field.source_px[ys, xs]
         excess = footprint_excess(previous, source, residual[ys, xs], tolerance, config)
         coarse[ys // s, xs // s] = excess > 0
-    mask = np.repeat(np.repeat(coarse, s, axis=0), s, axis=1)[:h, :w] & moving
+    mask = np.repeat(np.repeat(coarse, s, axis=0), s, axis=1)[:h, :w] & candidates
+    if moving_at is not None:
+        ys, xs = np.nonzero(mask)
+        mask[ys, xs] = moving_at(ys, xs)
     kernel = np.ones((config.open_px, config.open_px), np.uint8) if config.open_px > 1 else _SQUARE3
     return cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel) > 0
 
@@ -253,9 +264,15 @@ class VelocityAnimateDetector:
             return DetectorOutput.empty(field.shape, camera=fit)
         tolerance = max(cfg.floor_px, cfg.noise_sigmas * fit.noise_px)
         speed = fit.residual_length()
+
         # Only points whose motion off the plane the image determines are tested.
-        moving = fit.determined_beyond(field, speed > tolerance, tolerance)
-        violation = violations(field, fit.residual_px, moving, previous, tolerance, cfg)
+        def moving_at(ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+            return fit.determined_beyond_at(field, ys, xs, tolerance)
+
+        candidates = speed > tolerance
+        violation = violations(
+            field, fit.residual_px, candidates, previous, tolerance, cfg, moving_at
+        )
         # The test reads two flow fields (this one and, where each point came
         # from, the previous one), each extrapolated along the frame edge.
         violation = without_frame_edge(violation, 2 * fit.edge_band_px)

@@ -246,11 +246,8 @@ class CameraFit:
         epipole: np.ndarray | None = None, residual: np.ndarray | None = None,
     ) -> np.ndarray:  # fmt: skip
         """``candidates`` narrowed to the pixels whose *determined* residual
-        (:func:`~motiondetect.measurement.aperture.determined` over the
-        field's patch) lies off the ray through ``epipole`` by more than
-        ``tolerance`` px/frame; (h, w) bool, a new array. A velocity the
-        flow measured the other way does not confirm (:meth:`VelocityField.confirmed_at`)
-        is DIS's error, not a residual, and is never beyond.
+        lies off the ray by more than ``tolerance`` (:meth:`determined_beyond_at`);
+        (h, w) bool, a new array.
 
         Evaluated at the candidates only (the residual itself is the bound:
         the determined part is never longer), so a frame without
@@ -260,15 +257,34 @@ class CameraFit:
         if not out.any():
             return out
         ys, xs = np.nonzero(out)
+        out[ys, xs] = self.determined_beyond_at(field, ys, xs, tolerance, epipole, residual)
+        return out
+
+    def determined_beyond_at(
+        self, field: VelocityField, ys: np.ndarray, xs: np.ndarray, tolerance: float,
+        epipole: np.ndarray | None = None, residual: np.ndarray | None = None,
+    ) -> np.ndarray:  # fmt: skip
+        """Whether the *determined* residual at each pixel ``(ys, xs)``
+        (:func:`~motiondetect.measurement.aperture.determined` over the
+        field's patch) lies off the ray through ``epipole`` by more than
+        ``tolerance`` px/frame, (N,) bool; each pixel's answer is its own.
+        A velocity the flow measured the other way does not confirm
+        (:meth:`VelocityField.confirmed_at`) is DIS's error, not a residual,
+        and is never beyond.
+        """
+        out = np.zeros(len(ys), bool)
+        if not len(ys):
+            return out
         confirmed = field.confirmed_at(ys, xs)
         if not confirmed.all():
-            out[ys[~confirmed], xs[~confirmed]] = False
             ys, xs = ys[confirmed], xs[confirmed]
+        if not len(ys):
+            return out
         residual = (self.residual_px if residual is None else residual)[ys, xs]
         if self.aperture_energy > 0:
             tensor = tuple(t[ys, xs] for t in field.structure)
             residual = determined(residual, tensor, self.aperture_energy)
-        out[ys, xs] = off_ray(residual, field.pixel_grid[ys, xs], epipole) > tolerance
+        out[confirmed] = off_ray(residual, field.pixel_grid[ys, xs], epipole) > tolerance
         return out
 
     def residual_length(self) -> np.ndarray:
