@@ -73,10 +73,46 @@ def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = T
     tracks = [str(d.get("track", "")) for r in map(json.loads, lines) for d in r["detections"]]
     assert [row[-1] for row in rows[1:]] == tracks
     assert (out / "events.csv").exists()
+    check_tracks(out, rows[1:], summary)
     assert (out / "timeline.png").exists() == timeline
     if video:
         assert decode_count(out / "annotated.mp4") == frames
     return summary
+
+
+def check_tracks(out: Path, detections: list[list[str]], summary: dict) -> list[dict]:
+    """tracks.csv agrees with detections.csv: one row per track id, with its
+    first and last frame, its count and its peak score."""
+    tracks = list(csv.DictReader((out / "tracks.csv").read_text().splitlines()))
+    assert len(tracks) == summary["totals"]["tracks"]
+    by_id: dict[str, list] = {}
+    for row in detections:
+        if row[-1]:
+            by_id.setdefault(row[-1], []).append(row)
+    assert sorted(t["track"] for t in tracks) == sorted(by_id)
+    for t in tracks:
+        rows = by_id[t["track"]]
+        frames = [int(r[0]) for r in rows]
+        assert (int(t["start_frame"]), int(t["end_frame"])) == (min(frames), max(frames))
+        assert int(t["frames"]) == len(rows)
+        assert float(t["peak_score"]) == max(float(r[8]) for r in rows)
+    return tracks
+
+
+def test_tracks_csv_follows_the_mover(tmp_path, clip):
+    """The clip's one smooth mover is one track over most of its frames, its
+    centre moving the way the mover's truth does."""
+    assert invoke("detect", clip, "-o", tmp_path, "-q", "--no-video").exit_code == 0
+    out = tmp_path / "pan"
+    tracks = list(csv.DictReader((out / "tracks.csv").read_text().splitlines()))
+    longest = max(tracks, key=lambda t: int(t["frames"]))
+    assert int(longest["frames"]) >= 10  # of 16, the first two frames warming up
+    truth = [fr.mask == 255 for fr in scene("pan", ("smooth",), frames=16)]
+    first, last = int(longest["start_frame"]), int(longest["end_frame"])
+    (y0, x0), (y1, x1) = (np.argwhere(truth[i]).mean(axis=0) for i in (first, last))
+    moved = float(longest["end_cx"]) - float(longest["start_cx"])
+    assert abs(x1 - x0) > 5 and np.sign(moved) == np.sign(x1 - x0)
+    assert abs(moved - (x1 - x0)) < 0.5 * abs(x1 - x0)
 
 
 def test_detect_writes_every_output(tmp_path, clip):

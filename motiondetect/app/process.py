@@ -23,6 +23,7 @@ from motiondetect.app.settings import Settings
 from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
 from motiondetect.detection.detector import FrameResult, MotionDetector
 from motiondetect.detection.events import EventTimeline
+from motiondetect.detection.track_table import TrackTable
 from motiondetect.io.annotate import annotate, annotated_size
 from motiondetect.io.encode import BackgroundSink
 from motiondetect.io.files import TEMPORARY_PREFIX
@@ -33,6 +34,7 @@ from motiondetect.io.report import (
     atomic_text,
     write_events_csv,
     write_json,
+    write_tracks_csv,
 )
 from motiondetect.io.timeline import draw_timeline
 from motiondetect.io.video import (
@@ -241,8 +243,8 @@ class _InRange:
 
 def _detect_frames(
     frames: _InRange, writers: _FrameWriters, settings: Settings, progress: Progress | None
-) -> tuple[EventTimeline, dict]:
-    """The per-frame loop; returns the timeline and the totals of the summary
+) -> tuple[EventTimeline, TrackTable, dict]:
+    """The per-frame loop; returns the timeline, the tracks and the totals of the summary
     that it counts: detections, frames judged (the others held a result,
     ``--frame-skip``), judged frames marked unreliable, by reason, judged
     frames on which an overlay (a burnt-in caption or logo) was not flagged,
@@ -252,13 +254,14 @@ def _detect_frames(
     detector = make_detector(settings, source)
     info = source.info
     roi = roi_mask(settings, info.width, info.height)
-    timeline, detections, judged = EventTimeline(), 0, 0
+    timeline, tracks, detections, judged = EventTimeline(), TrackTable(), 0, 0
     unreliable: collections.Counter = collections.Counter()
     overlaid, repeated, picture = 0, 0, None
     for frame, result in detector.stream(frames, settings.frame_skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])
+        tracks.add(result.index, result.time_s, record["detections"])
         judged += result.held_from is None
         if result.held_from is None and result.reason:
             unreliable[result.reason] += 1
@@ -280,7 +283,7 @@ def _detect_frames(
     }
     if picture is not None:
         counted["picture"] = list(picture.box)
-    return timeline, {**counted, "detections": detections}
+    return timeline, tracks, {**counted, "detections": detections}
 
 
 def _second_passes(
@@ -315,7 +318,7 @@ def _process(
     started = time.perf_counter()
     frames = _InRange(source, settings)
     try:
-        timeline, counted = _detect_frames(frames, writers, settings, progress)
+        timeline, tracks, counted = _detect_frames(frames, writers, settings, progress)
     except BaseException:
         writers.close(ok=False)
         raise
@@ -326,6 +329,8 @@ def _process(
     events = timeline.events(settings.event_rules(source.info.fps), source.info.fps)
     with atomic_text(out_dir / "events.csv") as fp:
         write_events_csv(fp, events)
+    with atomic_text(out_dir / "tracks.csv") as fp:
+        write_tracks_csv(fp, tracks.rows())
     if settings.timeline:
         write_image(out_dir / "timeline.png", draw_timeline(timeline, events))
     _second_passes(job, source, out_dir, events, settings)
@@ -338,6 +343,7 @@ def _process(
         **counted,
         "frames_with_detections": int(sum(b is not None for b in timeline.boxes)),
         "events": len(events),
+        "tracks": len(tracks),
     }
     outputs = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
     status = "partial" if source.partial else "complete"

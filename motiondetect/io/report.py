@@ -1,4 +1,4 @@
-"""Report writers: JSON lines, CSV and the summary. They take open files.
+"""Report writers: JSON lines, CSV (detections, events, tracks), the summary. They take open files.
 
 ``frames.jsonl`` is flushed line by line, so a crash loses no finished frame;
 the summary is written through :func:`atomic_text`, so it either exists
@@ -38,6 +38,13 @@ EVENT_COLUMNS = [
     "w",
     "h",
 ]
+
+# One row per track (an object kept across frames): tracks.csv.
+TRACK_COLUMNS = [
+    "track", "start_frame", "end_frame", "start_s", "end_s", "start_timecode",
+    "end_timecode", "duration_s", "frames", "peak_frame", "peak_score", "detectors",
+    "start_cx", "start_cy", "end_cx", "end_cy", "x", "y", "w", "h",
+]  # fmt: skip
 
 
 @contextlib.contextmanager
@@ -126,6 +133,20 @@ def write_events_csv(fp: TextIO, events: list[dict], *, with_input: bool = False
                 h,
             ]
         )
+
+
+def write_tracks_csv(fp: TextIO, tracks: list[dict]) -> None:
+    """Tracks as CSV (:meth:`~motiondetect.detection.track_table.TrackTable.rows`)."""
+    writer = csv.writer(fp, lineterminator="\n")
+    writer.writerow(TRACK_COLUMNS)
+    for t in tracks:
+        writer.writerow(
+            [t["track"], t["start_frame"], t["end_frame"], f"{t['start_s']:.4f}",
+             f"{t['end_s']:.4f}", t["start_timecode"], t["end_timecode"],
+             f"{t['duration_s']:.4f}", t["frames"], t["peak_frame"], f"{t['peak_score']:.4f}",
+             "+".join(t["detectors"]), t["start_cx"], t["start_cy"], t["end_cx"], t["end_cy"],
+             *t["bbox"]]
+        )  # fmt: skip
 
 
 def write_json(fp: TextIO, document: dict) -> None:
