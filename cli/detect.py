@@ -325,13 +325,19 @@ def _picture(box: list[int] | None) -> str:
     return f"; black bars or side panels left out, picture {w}x{h} at ({x}, {y})"
 
 
+def _tracks(count: int | None) -> str:
+    """The number of movers tracked (tracks.csv), where tracks are kept."""
+    return "" if not count else f" of {count} tracked object{'s' * (count != 1)}"
+
+
 def _print_summary(result) -> None:
     for r in result.results:
         if r.status == "done":
             s = r.summary
             click.echo(
                 f"{r.job.name}: {s['totals']['frames']} frames, {s['totals']['detections']} "
-                f"detections, {s['totals']['events']} events, {s['speed']['frames_per_s']} fps"
+                f"detections{_tracks(s['totals'].get('tracks'))}, {s['totals']['events']} events, "
+                f"{s['speed']['frames_per_s']} fps"
                 + (" (partial input)" if s["status"] == "partial" else "")
                 + _unreliable(s["totals"].get("frames_unreliable", {}))
                 + _overlay(s["totals"].get("frames_overlay", 0))

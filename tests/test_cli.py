@@ -18,6 +18,7 @@ from motiondetect_cli.main import main
 from skimage import data
 
 from motiondetect.detection.base import DETECTOR_SETS
+from motiondetect.io.report import TRACK_COLUMNS
 from motiondetect.io.video import count_decodable_frames
 
 from .scenes import scene
@@ -342,6 +343,14 @@ def test_batch_with_bad_files(tmp_path, clip_frames):
         check_outputs(out / name, 10)
     rows = list(csv.reader((out / "events.csv").read_text().splitlines()))
     assert rows[0][0] == "input"
+    # The batch's tracks.csv: each finished input's rows, led by that input.
+    batch_tracks = list(csv.reader((out / "tracks.csv").read_text().splitlines()))
+    assert batch_tracks[0] == ["input", *TRACK_COLUMNS]
+    expected = []
+    for name, file in (("a", "a.mp4"), ("b", "b.avi"), ("sub/c", "sub/c.mkv")):
+        own = list(csv.reader((out / name / "tracks.csv").read_text().splitlines()))[1:]
+        expected += [(str(batch / file), *row) for row in own]
+    assert expected and sorted(map(tuple, batch_tracks[1:])) == sorted(expected)
     assert (batch / "a.mp4").read_bytes() == good  # inputs are never written to
 
 

@@ -9,6 +9,7 @@ the others. A batch of more than one input also gets a top-level
 from __future__ import annotations
 
 import contextlib
+import csv
 import ctypes
 import fcntl
 import json
@@ -33,7 +34,7 @@ from motiondetect.app.inputs import (
 )
 from motiondetect.app.process import STREAM_STOP, process_input
 from motiondetect.app.settings import Settings
-from motiondetect.io.report import atomic_text, write_events_csv
+from motiondetect.io.report import atomic_text, write_batch_tracks_csv, write_events_csv
 
 LOCK_NAME = ".motiondetect.lock"
 
@@ -281,6 +282,7 @@ def run(
         results.sort(key=lambda r: order.get(r.job, 0))
         if len(jobs) > 1:
             _write_batch_events(settings.output, results)
+            _write_batch_tracks(settings.output, results)
     return RunResult(results)
 
 
@@ -288,6 +290,19 @@ def _write_batch_events(output: Path, results: list[InputResult]) -> None:
     """One events.csv at the top level listing every input's events."""
     with atomic_text(output / "events.csv") as fp:
         write_events_csv(fp, batch_events(output, results), with_input=True)
+
+
+def _write_batch_tracks(output: Path, results: list[InputResult]) -> None:
+    """One tracks.csv at the top level listing every finished input's tracks."""
+    rows = []
+    for result in results:
+        path = output / result.job.name / "tracks.csv"
+        if result.status == "failed" or not path.is_file():
+            continue
+        with open(path, encoding="utf-8", newline="") as fp:
+            rows.extend([result.job.label, *row] for row in list(csv.reader(fp))[1:])
+    with atomic_text(output / "tracks.csv") as fp:
+        write_batch_tracks_csv(fp, rows)
 
 
 def batch_events(output: Path, results: list[InputResult]) -> list[dict]:

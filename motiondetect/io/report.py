@@ -149,6 +149,13 @@ def write_tracks_csv(fp: TextIO, tracks: list[dict]) -> None:
         )  # fmt: skip
 
 
+def write_batch_tracks_csv(fp: TextIO, rows: list[list[str]]) -> None:
+    """A batch's tracks: the rows of each input's tracks.csv, each led by its input."""
+    writer = csv.writer(fp, lineterminator="\n")
+    writer.writerow(["input", *TRACK_COLUMNS])
+    writer.writerows(rows)
+
+
 def write_json(fp: TextIO, document: dict) -> None:
     json.dump(document, fp, indent=2, allow_nan=False)
     fp.write("\n")
