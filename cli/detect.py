@@ -74,7 +74,8 @@ def _d(key: str) -> str:
 @click.option(
     "--video-size",
     type=int,
-    help=f"Long side of the annotated video, px {_d('video_size')}.",
+    help=f"Long side of the annotated video, px {_d('video_size')}; an input narrower "
+    "than 320 px is enlarged to 320 wide within it.",
 )
 @click.option(
     "--egomotion",

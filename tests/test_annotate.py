@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from motiondetect.detection.detector import FrameResult
-from motiondetect.io.annotate import annotate
+from motiondetect.io.annotate import MIN_WIDTH, annotate, annotated_size
 from motiondetect.io.colours import RAY
 
 
@@ -61,3 +62,33 @@ def test_the_legend_keeps_off_a_caption_left_out(left, right, place):
         assert moved[h - 20 :, w // 3 :].any()
     else:
         assert moved[20:50].any() and not moved[h - 20 :].any()
+
+
+@pytest.mark.parametrize(
+    "size, long_side, expected",
+    [
+        ((1920, 1080), 512, (512, 288)),  # reduced to the long side
+        ((352, 288), 512, (352, 288)),  # as it is
+        ((176, 144), 512, (320, 262)),  # QCIF enlarged to the overlay's width
+        ((240, 156), 512, (320, 208)),  # UCSD
+        ((144, 176), 512, (320, 392)),  # upright
+        ((176, 144), 200, (200, 164)),  # never beyond --video-size
+        ((1080, 1920), 512, (288, 512)),  # an upright phone clip keeps the long side
+    ],
+)
+def test_annotated_size(size, long_side, expected):
+    assert annotated_size(*size, long_side) == expected
+
+
+def test_a_small_input_is_annotated_at_a_readable_width():
+    """At QCIF's 176 px the label ran off the frame; enlarged to MIN_WIDTH it
+    fits, and the picture is interpolated, not blocky."""
+    ramp = np.tile(np.linspace(0, 255, 176).astype(np.uint8), (144, 1))
+    image = np.dstack([ramp] * 3)
+    empty = FrameResult(40, 1.33, [], np.zeros((64, 64), bool), None, None, None)
+    size = annotated_size(176, 144, 512)
+    out = annotate(image, empty, size)
+    assert out.shape[:2] == (size[1], size[0]) and size[0] == MIN_WIDTH
+    middle = (size[1] // 2, slice(0, size[0] // 2))  # no legend, no label there
+    linear = cv2.resize(image, size, interpolation=cv2.INTER_LINEAR)
+    assert np.array_equal(out[middle], linear[middle])

@@ -18,17 +18,31 @@ _FONT = cv2.FONT_HERSHEY_SIMPLEX
 _LEFT_OUT = (160, 160, 160)  # the outline of a caption or logo left out
 
 
+#: The overlay's text is readable from this width up (:func:`_text_size`): a
+#: narrower input (QCIF, the UCSD clips) is enlarged to it for the annotated
+#: video, within ``--video-size``.
+MIN_WIDTH = 320
+
+
 def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
-    scale = min(1.0, long_side / max(width, height))
+    """The annotated video's (width, height): the input's, reduced to a long
+    side of ``long_side`` or enlarged to :data:`MIN_WIDTH` (never beyond
+    ``long_side``); even, as H.264's 4:2:0 needs."""
+    limit = long_side / max(width, height)
+    scale = min(1.0, limit)
+    if width * scale < MIN_WIDTH:
+        scale = min(MIN_WIDTH / width, limit)
     return (max(2, int(round(width * scale / 2)) * 2), max(2, int(round(height * scale / 2)) * 2))
 
 
 def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> np.ndarray:
     """Draw ``result`` on a copy of ``image`` resized to ``size`` (width, height)."""
     h0, w0 = image.shape[:2]
-    out = (
-        cv2.resize(image, size, interpolation=cv2.INTER_AREA) if (w0, h0) != size else image.copy()
-    )
+    if (w0, h0) == size:
+        out = image.copy()
+    else:  # area-averaged when reduced, interpolated when enlarged
+        smaller = size[0] < w0
+        out = cv2.resize(image, size, interpolation=cv2.INTER_AREA if smaller else cv2.INTER_LINEAR)
     sx, sy = size[0] / w0, size[1] / h0
     if result.flagged_pixels.any():
         flagged = result.input_mask(*size)
