@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from motiondetect.detection.detector import FrameResult
-from motiondetect.io.annotate import MIN_WIDTH, annotate, annotated_size
+from motiondetect.detection.regions import Region
+from motiondetect.io.annotate import MIN_WIDTH, TRAIL_FRAMES, Trails, annotate, annotated_size
 from motiondetect.io.colours import RAY
 
 
@@ -92,3 +93,24 @@ def test_a_small_input_is_annotated_at_a_readable_width():
     middle = (size[1] // 2, slice(0, size[0] // 2))  # no legend, no label there
     linear = cv2.resize(image, size, interpolation=cv2.INTER_LINEAR)
     assert np.array_equal(out[middle], linear[middle])
+
+
+def test_a_tracks_recent_path_is_drawn_behind_its_box():
+    """A box moving 15 px a frame to the right: after six frames its path
+    runs from its first centre to its box, in the box's colour; a track
+    unseen for the trail's length is forgotten."""
+    grey = np.full((240, 320, 3), 128, np.uint8)
+    trails = Trails()
+
+    def result(index: int, x: int, track: int = 4) -> FrameResult:
+        region = Region([x, 60, 20, 20], np.zeros((0, 2), int), 400, 0.9, ("velocity-ray",), track)
+        return FrameResult(index, index / 30, [region], np.zeros((64, 64), bool), None, None, None)
+
+    for i in range(6):
+        out = annotate(grey, result(i, 20 + 15 * i), (320, 240), trails)
+    assert tuple(out[70, 50]) == RAY  # on the path from (30, 70), left of the box at 95-115
+    assert tuple(out[90, 50]) == (128, 128, 128)  # off it
+    plain = annotate(grey, result(5, 95), (320, 240))
+    assert tuple(plain[70, 50]) == (128, 128, 128)  # no trails asked for
+    later = annotate(grey, result(5 + TRAIL_FRAMES, 95), (320, 240), trails)
+    assert tuple(later[70, 50]) == (128, 128, 128)  # the old path is gone

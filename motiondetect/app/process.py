@@ -24,7 +24,7 @@ from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
 from motiondetect.detection.detector import FrameResult, MotionDetector
 from motiondetect.detection.events import EventTimeline
 from motiondetect.detection.track_table import TrackTable
-from motiondetect.io.annotate import annotate, annotated_size
+from motiondetect.io.annotate import Trails, annotate, annotated_size
 from motiondetect.io.encode import BackgroundSink
 from motiondetect.io.files import TEMPORARY_PREFIX
 from motiondetect.io.records import frame_record, summary_record
@@ -174,6 +174,7 @@ class _FrameWriters:
             shutil.rmtree(self.masks_dir, ignore_errors=True)
             self.masks_dir.mkdir()
         self.size = annotated_size(info.width, info.height, settings.video_size)
+        self._trails = Trails()  # drawn on the video's thread, in frame order
         video = out_dir / f"annotated.{settings.video_format}"
         self.sink = (
             BackgroundSink(VideoSink(video, info.fps, self.size), self._draw)
@@ -204,7 +205,7 @@ class _FrameWriters:
 
     def _draw(self, item: tuple[SourceFrame, FrameResult]) -> tuple:
         frame, result = item
-        return annotate(to_display(frame.image), result, self.size), frame.time_s
+        return annotate(to_display(frame.image), result, self.size, self._trails), frame.time_s
 
     def close(self, ok: bool) -> None:
         with self._files:

@@ -18,6 +18,10 @@ _FONT = cv2.FONT_HERSHEY_SIMPLEX
 _LEFT_OUT = (160, 160, 160)  # the outline of a caption or logo left out
 
 
+#: Frames of a track's path drawn behind its box (:class:`Trails`): a second
+#: at 30 frames/s.
+TRAIL_FRAMES = 30
+
 #: The overlay's text is readable from this width up (:func:`_text_size`): a
 #: narrower input (QCIF, the UCSD clips) is enlarged to it for the annotated
 #: video, within ``--video-size``.
@@ -35,8 +39,46 @@ def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
     return (max(2, int(round(width * scale / 2)) * 2), max(2, int(round(height * scale / 2)) * 2))
 
 
-def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> np.ndarray:
-    """Draw ``result`` on a copy of ``image`` resized to ``size`` (width, height)."""
+class Trails:
+    """Each track's recent path, drawn behind its box: the centres of its
+    boxes over the last ``frames`` frames, joined, in the colour of its box.
+
+    The one piece of the overlay with a memory (which way a mover went), so
+    it lives in this small object, fed the frames in order; a track unseen
+    for ``frames`` frames is forgotten.
+    """
+
+    def __init__(self, frames: int = TRAIL_FRAMES) -> None:
+        self.frames = frames
+        self._paths: dict[int, list[tuple[int, tuple[float, float]]]] = {}
+
+    def update(self, index: int, detections: list[dict]) -> None:
+        """Take frame ``index``'s detections (frames.jsonl records, input px)."""
+        for det in detections:
+            if "track" in det:
+                x, y, w, h = det["bbox"]
+                self._paths.setdefault(det["track"], []).append((index, (x + w / 2, y + h / 2)))
+        for track, path in list(self._paths.items()):
+            path[:] = [p for p in path if p[0] > index - self.frames]
+            if not path:
+                del self._paths[track]
+
+    def draw(self, out: np.ndarray, detections: list[dict], sx: float, sy: float) -> None:
+        """The paths of the tracks in ``detections``, in place, scaled by ``sx, sy``."""
+        for det in detections:
+            path = self._paths.get(det.get("track"), [])
+            if len(path) < 2:
+                continue
+            points = np.array([(cx * sx, cy * sy) for _, (cx, cy) in path], np.int32)
+            colour = DETECTOR_COLOURS.get(tuple(det["detectors"]), (0, 255, 255))
+            cv2.polylines(out, [points], False, colour, 2, cv2.LINE_AA)
+
+
+def annotate(
+    image: np.ndarray, result: FrameResult, size: tuple[int, int], trails: Trails | None = None
+) -> np.ndarray:
+    """Draw ``result`` on a copy of ``image`` resized to ``size`` (width, height);
+    with ``trails``, fed this frame first, each track's recent path too."""
     h0, w0 = image.shape[:2]
     if (w0, h0) == size:
         out = image.copy()
@@ -51,7 +93,11 @@ def annotate(image: np.ndarray, result: FrameResult, size: tuple[int, int]) -> n
         out = cv2.addWeighted(tint, 0.35, out, 0.65, 0)
     overlay = _overlay_mask(out, result.overlay)
     _draw_overlay(out, overlay)
-    draw_boxes(out, [r.to_json() for r in result.regions], sx, sy)
+    detections = [r.to_json() for r in result.regions]
+    if trails is not None:
+        trails.update(result.index, detections)
+        trails.draw(out, detections, sx, sy)
+    draw_boxes(out, detections, sx, sy)
     _draw_coarse(out, result)
     if not result.reliable:
         cv2.rectangle(out, (0, 0), (out.shape[1] - 1, out.shape[0] - 1), (0, 200, 255), 4)
