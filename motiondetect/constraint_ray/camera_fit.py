@@ -245,18 +245,9 @@ class CameraFit:
         self, field: VelocityField, candidates: np.ndarray, tolerance: float,
         epipole: np.ndarray | None = None, residual: np.ndarray | None = None,
     ) -> np.ndarray:  # fmt: skip
-        """``candidates`` narrowed to the pixels whose *determined* residual
-        lies off the ray by more than ``tolerance`` (:meth:`determined_beyond_at`);
-        (h, w) bool, a new array.
-
-        Evaluated at the candidates only (the residual itself is the bound:
-        the determined part is never longer), so a frame without
-        candidates costs nothing.
-        """
-        out = candidates.copy()
-        if not out.any():
-            return out
-        ys, xs = np.nonzero(out)
+        """``candidates`` (h, w) narrowed by :meth:`determined_beyond_at`, a new array."""
+        out = np.zeros_like(candidates)
+        ys, xs = np.nonzero(candidates)
         out[ys, xs] = self.determined_beyond_at(field, ys, xs, tolerance, epipole, residual)
         return out
 
