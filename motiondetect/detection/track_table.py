@@ -28,20 +28,21 @@ class _Life:
     peak_frame: int = 0
     peak_score: float = -1.0
     detectors: set[str] = field(default_factory=set)
-    reach: list[int] = field(default_factory=list)  # x0, y0, x1, y1 over all its boxes
+    reach: list[int] = field(init=False)  # x0, y0, x1, y1 around all its boxes
 
-    def add(self, frame: int, time_s: float, detection: dict) -> None:
-        x, y, w, h = (int(v) for v in detection["bbox"])
-        self.end_frame, self.end_s, self.end_box = frame, time_s, (x, y, w, h)
+    def __post_init__(self) -> None:
+        x, y, w, h = self.start_box
+        self.reach = [x, y, x + w, y + h]
+
+    def add(self, frame: int, time_s: float, box: tuple[int, int, int, int], detection: dict):
+        x, y, w, h = box
+        self.end_frame, self.end_s, self.end_box = frame, time_s, box
         self.frames += 1
         if detection["score"] > self.peak_score:
             self.peak_frame, self.peak_score = frame, float(detection["score"])
         self.detectors.update(detection["detectors"])
-        if not self.reach:
-            self.reach = [x, y, x + w, y + h]
-        else:
-            r = self.reach
-            r[:] = [min(r[0], x), min(r[1], y), max(r[2], x + w), max(r[3], y + h)]
+        r = self.reach
+        r[:] = [min(r[0], x), min(r[1], y), max(r[2], x + w), max(r[3], y + h)]
 
 
 def _centre(box: tuple[int, int, int, int]) -> tuple[float, float]:
@@ -62,11 +63,11 @@ class TrackTable:
             track = detection.get("track")
             if track is None:
                 continue
+            box = tuple(int(v) for v in detection["bbox"])
             life = self._lives.get(track)
             if life is None:
-                box = tuple(int(v) for v in detection["bbox"])
                 life = self._lives[track] = _Life(track, frame, time_s, box)
-            life.add(frame, time_s, detection)
+            life.add(frame, time_s, box, detection)
 
     def __len__(self) -> int:
         return len(self._lives)
