@@ -11,7 +11,7 @@ from pathlib import Path
 
 from motiondetect.app.settings import Settings
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.io.annotate import annotate, draw_boxes
+from motiondetect.io.annotate import Trails, annotate, draw_boxes
 from motiondetect.io.video import SourceFrame, VideoSink, open_source, to_display, write_image
 
 
@@ -70,6 +70,7 @@ def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Sett
         info = source.info
         size = (info.width - info.width % 2, info.height - info.height % 2)
         detector = _make_detector(settings, source) if settings.clips_annotated else None
+        trails = Trails()
         for frame in source:
             result = _annotated_result(detector, frame)
             if not pending:
@@ -79,7 +80,7 @@ def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Sett
                 sink = VideoSink(clip_dir / f"event_{ev['event']:04d}.mp4", info.fps, size)
             if sink is not None:
                 image = to_display(frame.image)[: size[1], : size[0]]
-                sink.write(image if result is None else annotate(image, result, size))
+                sink.write(image if result is None else annotate(image, result, size, trails))
             if frame.index == ev["end_frame"] and sink is not None:
                 sink.close()
                 written.append(sink.path)
