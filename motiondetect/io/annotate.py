@@ -39,6 +39,11 @@ def annotated_size(width: int, height: int, long_side: int) -> tuple[int, int]:
     return (max(2, int(round(width * scale / 2)) * 2), max(2, int(round(height * scale / 2)) * 2))
 
 
+def _box_colour(detection: dict) -> tuple[int, int, int]:
+    """A detection's colour, by the detectors that found it (BGR)."""
+    return DETECTOR_COLOURS.get(tuple(detection["detectors"]), (0, 255, 255))
+
+
 class Trails:
     """Each track's recent path, drawn behind its box: the centres of its
     boxes over the last ``frames`` frames, joined, in the colour of its box.
@@ -70,7 +75,7 @@ class Trails:
             if len(path) < 2:
                 continue
             points = np.array([(cx * sx, cy * sy) for _, (cx, cy) in path], np.int32)
-            colour = DETECTOR_COLOURS.get(tuple(det["detectors"]), (0, 255, 255))
+            colour = _box_colour(det)
             cv2.polylines(out, [points], False, colour, 2, cv2.LINE_AA)
 
 
@@ -114,7 +119,7 @@ def draw_boxes(
     input-pixel boxes to ``out``."""
     for det in detections:
         x, y, w, h = det["bbox"]
-        colour = DETECTOR_COLOURS.get(tuple(det["detectors"]), (0, 255, 255))
+        colour = _box_colour(det)
         p0 = (int(x * sx), int(y * sy))
         p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
         cv2.rectangle(out, p0, p1, colour, 2)
