@@ -20,6 +20,12 @@ lays the rigid world out anew (``motiondetect synth --world-seed``); render
 it into a folder of its own and point ``$MOTIONDETECT_SYNTH`` there:
 
     MOTIONDETECT_SYNTH=/tmp/synth-world3 python benchmarks/synth_set.py --world 3
+
+``--rate 2`` records the same scenes at 60 frames/s (the same paths in
+time, half the motion per frame; docs/detectors.md, "Judged about every
+1/30 s"):
+
+    MOTIONDETECT_SYNTH=/tmp/synth60 python benchmarks/synth_set.py --rate 2
 """
 
 from __future__ import annotations
@@ -43,15 +49,18 @@ FRAMES = 60
 SEEDS = {0.7: 107, 1.4: 114}
 
 
-def scenes(world_seed: int = 0) -> list[tuple[str, SynthConfig]]:
+def scenes(world_seed: int = 0, rate: int = 1) -> list[tuple[str, SynthConfig]]:
     """(folder name under the set, what to render) for every scene of the set,
-    in the world laid out by ``world_seed`` (0: the samples')."""
+    in the world laid out by ``world_seed`` (0: the samples'), recorded at
+    ``rate`` times 30 frames/s: the same paths in time, a ``rate``-th of the
+    motion per frame."""
     out = []
     for kind, movers in (("rigid", ()), ("movers", MOVERS)):
         for camera in CAMERAS:
             for speed in SPEEDS:
                 config = SynthConfig(
-                    camera=camera, movers=movers, frames=FRAMES, speed=speed,
+                    camera=camera, movers=movers, frames=FRAMES * rate, speed=speed / rate,
+                    fps=30.0 * rate, period_frames=SynthConfig.period_frames * rate,
                     seed=SEEDS[speed], world_seed=world_seed,
                 )  # fmt: skip
                 out.append((f"{kind}/{camera}-x{speed}", config))
@@ -76,9 +85,12 @@ def main() -> None:
     parser.add_argument(
         "--world", type=int, default=0, help="world seed of every scene (0: the samples' world)"
     )
+    parser.add_argument(
+        "--rate", type=int, default=1, help="record at RATE x 30 frames/s (same paths in time)"
+    )
     args = parser.parse_args()
     todo = []
-    for name, config in scenes(args.world):
+    for name, config in scenes(args.world, args.rate):
         folder = args.out / name
         if not (folder / "scene.json").exists():
             folder.parent.mkdir(parents=True, exist_ok=True)

@@ -30,6 +30,7 @@ logging.getLogger("motiondetect").addHandler(logging.NullHandler())
 from motiondetect.detection.base import Detector, DetectorOutput, registry  # noqa: E402
 from motiondetect.detection.detector import FrameResult, MotionDetector  # noqa: E402
 from motiondetect.detection.regions import Region  # noqa: E402
+from motiondetect.detection.streaming import auto_frame_skip  # noqa: E402
 from motiondetect.io.source import SourceFrame  # noqa: E402
 from motiondetect.io.video import FrameSource, VideoError, VideoInfo, open_source  # noqa: E402
 
@@ -56,7 +57,7 @@ def detect(
     measure: str = "velocity",
     fps: float = 30.0,
     persistence: int | None = None,
-    frame_skip: int = 0,
+    frame_skip: int | str = "auto",
 ) -> Iterator[FrameResult]:
     """Detect independent motion in every frame of ``source``, lazily.
 
@@ -69,9 +70,12 @@ def detect(
         As for :class:`MotionDetector`.
     fps : float
         Frame rate of in-memory frames, for ``time_s``.
-    frame_skip : int
+    frame_skip : int or "auto"
         Judge every (n+1)-th frame only; the others carry its result,
-        marked ``held_from`` (:meth:`MotionDetector.stream`).
+        marked ``held_from`` (:meth:`MotionDetector.stream`). "auto": one
+        judged frame about every 1/30 s, from the frame rate
+        (:func:`~motiondetect.detection.streaming.auto_frame_skip`: 1 at
+        60 frames/s, 0 up to 45).
 
     Yields
     ------
@@ -81,9 +85,11 @@ def detect(
     md = MotionDetector(detector, *configs, measure=measure, persistence=persistence)
     if isinstance(source, (str, Path)):
         with open_source(source) as frames:
-            for _, result in md.stream(frames, frame_skip):
+            skip = auto_frame_skip(frames.info.fps) if frame_skip == "auto" else frame_skip
+            for _, result in md.stream(frames, skip):
                 yield result
         return
     in_memory = (SourceFrame(i, i / fps, image) for i, image in enumerate(source))
-    for _, result in md.stream(in_memory, frame_skip):
+    skip = auto_frame_skip(fps) if frame_skip == "auto" else frame_skip
+    for _, result in md.stream(in_memory, skip):
         yield result

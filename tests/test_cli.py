@@ -28,9 +28,9 @@ FRAME_SCHEMA = json.loads((DOCS / "frames.schema.json").read_text())
 SUMMARY_SCHEMA = json.loads((DOCS / "summary.schema.json").read_text())
 
 
-def write_video(path: Path, frames, fourcc: str = "mp4v") -> Path:
+def write_video(path: Path, frames, fourcc: str = "mp4v", fps: float = 30.0) -> Path:
     h, w = frames[0].shape[:2]
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), 30.0, (w, h))
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), fps, (w, h))
     assert writer.isOpened()
     for f in frames:
         writer.write(f)

@@ -19,7 +19,7 @@ from pathlib import Path
 from motiondetect.app.clips import extract_clips, write_thumbnails
 from motiondetect.app.inputs import InputError, InputJob, InputResult, Progress, input_identity
 from motiondetect.app.roi import keep_detections, roi_mask
-from motiondetect.app.settings import Settings
+from motiondetect.app.settings import AUTO, Settings
 from motiondetect.constraint_ray.egomotion import EgoMotion, EgoMotionError
 from motiondetect.detection.detector import FrameResult, MotionDetector
 from motiondetect.detection.events import EventTimeline
@@ -258,7 +258,10 @@ def _detect_frames(
     timeline, tracks, detections, judged = EventTimeline(), TrackTable(), 0, 0
     unreliable: collections.Counter = collections.Counter()
     overlaid, repeated, picture = 0, 0, None
-    for frame, result in detector.stream(frames, settings.frame_skip):
+    skip = settings.skipped_frames(info.fps)
+    if skip and settings.frame_skip == AUTO:
+        log.info("%.4g frames/s: judging one frame in %d (--frame-skip auto)", info.fps, skip + 1)
+    for frame, result in detector.stream(frames, skip):
         result = keep_detections(result, roi, settings.min_area)
         record = writers.write(frame, result)
         detections += len(record["detections"])

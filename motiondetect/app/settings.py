@@ -35,6 +35,7 @@ from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.events import EventRules
 from motiondetect.detection.objects import TrackConfig
+from motiondetect.detection.streaming import auto_frame_skip
 from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.normal_flow import StageConfig
 
@@ -82,7 +83,7 @@ RUN_DEFAULTS: dict[str, object] = {
     "include": (),  # globs on paths relative to a scanned directory
     "exclude": (),
     "frames_fps": None,  # None: the video module's assumed rate, marked "assumed"
-    "frame_skip": 0,  # frames after each judged one that carry its result
+    "frame_skip": "auto",  # frames after each judged one that carry its result
     "min_event_frames": 3,
     "merge_gap_frames": 5,
     "pad_frames": 5,
@@ -118,6 +119,8 @@ RUN_CHECKS: dict[str, tuple] = {
 _FLAGS = ("masks", "video", "overwrite", "recursive", "extract_clips", "clips_annotated")
 _FLAGS += ("timeline", "thumbnails")
 _TIMES = ("min_event", "merge_gap", "pad", "start", "end")
+#: ``frame_skip``'s value that sets it from the input's frame rate.
+AUTO = "auto"
 
 
 class SettingsError(ValueError):
@@ -167,7 +170,7 @@ class Settings:
     include: tuple
     exclude: tuple
     frames_fps: float | None
-    frame_skip: int
+    frame_skip: int | str  # "auto": from the input's frame rate (skipped_frames)
     min_event_frames: int
     merge_gap_frames: int
     pad_frames: int
@@ -200,6 +203,15 @@ class Settings:
             frames(self.merge_gap, self.merge_gap_frames),
             frames(self.pad, self.pad_frames),
         )
+
+    def skipped_frames(self, fps: float | None) -> int:
+        """Frames skipped after each judged one for an input at ``fps``:
+        ``frame_skip``, or with "auto" one judged frame about every 1/30 s
+        (:func:`~motiondetect.detection.streaming.auto_frame_skip`); known
+        ego-motion, given frame to frame, judges every frame."""
+        if self.frame_skip != AUTO:
+            return int(self.frame_skip)
+        return 0 if self.egomotion is not None else auto_frame_skip(fps)
 
     def in_range(self, index: int, time_s: float) -> tuple[bool, bool]:
         """(before the start, past the end) for a frame."""
@@ -277,7 +289,7 @@ def _check_run(key: str, value):
     flag = f"--{key.replace('_', '-')}"
     if key in _FLAGS and not isinstance(value, bool):
         raise SettingsError(f"{flag} must be true or false, but got {value!r}")
-    if rule is None or value is None:
+    if rule is None or value is None or (key == "frame_skip" and value == AUTO):
         return value
     if isinstance(rule[0], str):
         if value not in rule:
@@ -286,9 +298,9 @@ def _check_run(key: str, value):
     kind, lo, hi = rule
     number = value if isinstance(value, (int, float)) and not isinstance(value, bool) else None
     if number is None or (kind is int and number != int(number)) or not math.isfinite(number):
-        raise SettingsError(
-            f"{flag} must be {'a whole' if kind is int else 'a'} number, got {value!r}"
-        )
+        what = "a whole" if kind is int else "a"
+        what = f"{AUTO} or {what}" if key == "frame_skip" else what
+        raise SettingsError(f"{flag} must be {what} number, got {value!r}")
     if number < lo or (hi is not None and number > hi):
         upper = f" and at most {hi}" if hi is not None else ""
         raise SettingsError(f"{flag} must be at least {lo}{upper}, but got {value!r}")
@@ -335,7 +347,7 @@ def make_settings(values: dict) -> Settings:
                 run[key] = parse_time(run[key], f"--{key.replace('_', '-')}")
             except ValueError as exc:
                 raise SettingsError(str(exc)) from None
-    if run["frame_skip"] and run["egomotion"] is not None:
+    if run["frame_skip"] not in (0, AUTO) and run["egomotion"] is not None:
         raise SettingsError(
             "--frame-skip cannot be combined with --egomotion (its motions are frame to frame)"
         )

@@ -3,11 +3,30 @@ or one ahead on a second thread (:meth:`.detector.MotionDetector.stream`)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
 
 F = TypeVar("F")
+
+#: Frame rate the detectors' tolerances were measured at: the shared clips run
+#: at 20-30 frames/s (docs/detectors.md, "Judged at about 30 frames a second").
+REFERENCE_FPS = 30.0
+
+
+def auto_frame_skip(fps: float | None) -> int:
+    """Frames to skip after each judged one so that judged frames come about
+    :data:`REFERENCE_FPS` apart: 0 up to 45 frames/s, 1 at 50-60, 3 at 120.
+
+    A camera at 60 frames/s moves half as far between frames as at 30, and a
+    slow mover's motion then sinks into the measurement's noise; judging
+    every 2nd frame gives the detectors the motion they were measured on,
+    for half the work. ``fps`` unknown or not positive: 0.
+    """
+    if fps is None or not math.isfinite(fps) or fps <= 0:
+        return 0
+    return max(0, int(fps / REFERENCE_FPS + 0.5) - 1)
 
 
 def judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:
