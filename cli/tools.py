@@ -20,6 +20,7 @@ from motiondetect_cli.common import _fail, _guard
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per input.")
 def info(inputs, as_json) -> None:
     """Print what the tool sees in each input: frames, fps, size and codec."""
+    from motiondetect.detection.streaming import auto_frame_skip
     from motiondetect.io.video import VideoError, open_source
 
     failed = 0
@@ -31,6 +32,7 @@ def info(inputs, as_json) -> None:
             click.echo(f"error: {exc}", err=True)
             failed += 1
             continue
+        skip = auto_frame_skip(meta["fps"])  # detect's --frame-skip auto
         if as_json:
             click.echo(json.dumps(meta))
         else:
@@ -41,6 +43,7 @@ def info(inputs, as_json) -> None:
                 + f", {meta['frame_count']} frames, "
                 f"{meta['duration_s']:.2f} s, codec {meta['codec']}"
                 + (f", rotation {meta['rotation_deg']} deg" if meta["rotation_deg"] else "")
+                + (f"; detect judges one frame in {skip + 1}" if skip else "")
             )
     sys.exit(1 if failed else 0)
 

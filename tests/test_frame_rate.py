@@ -64,6 +64,7 @@ def test_the_cli_judges_a_60_fps_video_every_2nd_frame_unless_told(tmp_path):
     lines = (tmp_path / "auto/fast/frames.jsonl").read_text().splitlines()
     records = [json.loads(line) for line in lines]
     assert [r.get("held_from") for r in records[:4]] == [None, 0, None, 2]
+    assert invoke("info", video).output.rstrip().endswith("; detect judges one frame in 2")
     result = invoke("detect", video, "-o", tmp_path / "all", "--frame-skip", "0", "-q")
     assert result.exit_code == 0, result.output
     summary = check_outputs(tmp_path / "all" / "fast", 16)
