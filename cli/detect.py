@@ -151,7 +151,7 @@ def _d(key: str) -> str:
     callback=lambda _ctx, _param, value: int(value) if value and value.isdigit() else value,
     help="Judge one frame in N+1; the N after it carry its detections, marked held_from "
     "in frames.jsonl. About N+1 times faster, coarser in time; auto: one judged frame "
-    f"about every 1/30 s, so 1 at 60 fps and 0 up to 45 fps {_d('frame_skip')}.",
+    f"about every 1/30 s, so 1 at 60 fps and 0 below 45 fps {_d('frame_skip')}.",
 )
 @click.option("--min-event-frames", type=int, help=f"Shortest event {_d('min_event_frames')}.")
 @click.option("--merge-gap-frames", type=int, help=f"Gap bridged {_d('merge_gap_frames')}.")

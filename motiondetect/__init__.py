@@ -75,7 +75,7 @@ def detect(
         marked ``held_from`` (:meth:`MotionDetector.stream`). "auto": one
         judged frame about every 1/30 s, from the frame rate
         (:func:`~motiondetect.detection.streaming.auto_frame_skip`: 1 at
-        60 frames/s, 0 up to 45).
+        60 frames/s, 0 below 45).
 
     Yields
     ------

@@ -17,7 +17,7 @@ REFERENCE_FPS = 30.0
 
 def auto_frame_skip(fps: float | None) -> int:
     """Frames to skip after each judged one so that judged frames come about
-    :data:`REFERENCE_FPS` apart: 0 up to 45 frames/s, 1 at 50-60, 3 at 120.
+    :data:`REFERENCE_FPS` apart: 0 below 45 frames/s, 1 from 45 to 75 (50, 60), 3 at 120.
 
     A camera at 60 frames/s moves half as far between frames as at 30, and a
     slow mover's motion then sinks into the measurement's noise; judging
