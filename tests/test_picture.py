@@ -185,3 +185,20 @@ def test_a_fade_to_black_says_nothing_of_the_bars():
     for _ in range(3):  # (each opening counts; the third would give up on bars)
         assert area.update(faded).box == (BAR, 0, W, H)
     assert area.update(_pillarboxed(background(0.0))).box == (BAR, 0, W, H)
+
+
+def test_a_grey_pillarboxed_picture_at_working_size_is_measured():
+    """Grey frames whose picture needs no reduction (320x240 inside its bars,
+    at most the working size) are measured on a crop of the frame, a view
+    DIS cannot take as it is; the results are the unboxed clip's."""
+    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=8)
+    plain, boxed = MotionDetector("both"), MotionDetector("both")
+    for t, (image, _) in enumerate(clip):
+        grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+        expected = plain.process(grey, t, 0.0)
+        got = boxed.process(_pillarboxed(grey), t, 0.0)
+        assert got.field is None or got.field.picture is not None
+        assert np.array_equal(
+            got.input_mask(W + 2 * BAR, H)[:, BAR:-BAR], expected.input_mask(W, H)
+        )
+    assert got.regions  # the mover

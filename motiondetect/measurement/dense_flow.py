@@ -269,7 +269,7 @@ def working_grey(frame: np.ndarray, size: tuple[int, int]) -> np.ndarray:
         grey = np.clip(grey, 0, 255).astype(np.uint8)
     if (grey.shape[1], grey.shape[0]) != size:
         grey = cv2.resize(grey, size, interpolation=cv2.INTER_AREA)
-    return grey
+    return np.ascontiguousarray(grey)  # a grey picture cropped from its bars is a view
 
 
 class DenseFlow:
