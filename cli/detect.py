@@ -327,9 +327,19 @@ def _picture(box: list[int] | None) -> str:
     return f"; black bars or side panels left out, picture {w}x{h} at ({x}, {y})"
 
 
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}{'s' * (count != 1)}"
+
+
 def _tracks(count: int | None) -> str:
     """The number of movers tracked (tracks.csv), where tracks are kept."""
-    return "" if not count else f" of {count} tracked object{'s' * (count != 1)}"
+    return "" if not count else f" of {_plural(count, 'tracked object')}"
+
+
+def _judged(totals: dict) -> str:
+    """The printed line's note of frames skipped by ``--frame-skip``."""
+    skipped = totals["frames"] - totals["frames_judged"] - totals.get("frames_repeated", 0)
+    return f"; {totals['frames_judged']} judged, {skipped} held (--frame-skip)" if skipped else ""
 
 
 def _print_summary(result) -> None:
@@ -337,10 +347,12 @@ def _print_summary(result) -> None:
         if r.status == "done":
             s = r.summary
             click.echo(
-                f"{r.job.name}: {s['totals']['frames']} frames, {s['totals']['detections']} "
-                f"detections{_tracks(s['totals'].get('tracks'))}, {s['totals']['events']} events, "
+                f"{r.job.name}: {_plural(s['totals']['frames'], 'frame')}, "
+                f"{_plural(s['totals']['detections'], 'detection')}"
+                f"{_tracks(s['totals'].get('tracks'))}, {_plural(s['totals']['events'], 'event')}, "
                 f"{s['speed']['frames_per_s']} fps"
                 + (" (partial input)" if s["status"] == "partial" else "")
+                + _judged(s["totals"])
                 + _unreliable(s["totals"].get("frames_unreliable", {}))
                 + _overlay(s["totals"].get("frames_overlay", 0))
                 + _repeated(s["totals"].get("frames_repeated", 0))

@@ -56,8 +56,12 @@ def test_a_slow_mover_filmed_at_60_fps_is_found_when_judged_at_30():
 def test_the_cli_judges_a_60_fps_video_every_2nd_frame_unless_told(tmp_path):
     images = [fr.image for fr in scene("pan", ("smooth",), frames=16)]
     video = write_video(tmp_path / "fast.mp4", images, fps=60.0)
-    result = invoke("detect", video, "-o", tmp_path / "auto", "--no-video", "-q")
+    result = invoke("detect", video, "-o", tmp_path / "auto", "--no-video")
     assert result.exit_code == 0, result.output
+    assert (
+        "fast: 16 frames, " in result.output
+        and "; 8 judged, 8 held (--frame-skip)" in result.output
+    )
     summary = check_outputs(tmp_path / "auto" / "fast", 16, video=False)
     assert summary["totals"]["frames_judged"] == 8
     assert summary["settings"]["frame_skip"] == "auto"
