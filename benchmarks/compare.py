@@ -30,6 +30,7 @@ from common import SHARED_DATA, SYNTH_SET
 
 from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.detection.detector import MotionDetector
+from motiondetect.detection.streaming import auto_frame_skip
 from motiondetect.io.files import last_number
 from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import (
@@ -137,21 +138,31 @@ class DenseResidual:
 
 class Ours:
     """motiondetect per frame; with ``frame_skip`` the frames after each judged
-    one get its mask, as ``--frame-skip`` reports them (``MotionDetector.stream``)."""
+    one get its mask, as ``--frame-skip`` reports them (``MotionDetector.stream``).
+    ``"auto"`` (the tool's default) takes the frame rate from the first two
+    frames' times: every frame is judged below 45 frames/s, so on every shared
+    clip."""
 
     def __init__(
         self, detector="both", egomotion=None, label=None, measure="velocity", configs=(),
-        frame_skip=0,
+        frame_skip="auto",
     ):  # fmt: skip
         self.md = MotionDetector(detector, *configs, measure=measure, egomotion=egomotion)
         self.name = label or f"motiondetect {measure} {detector}"
         self.index = 0
-        self.every = frame_skip + 1
-        self.held = None
+        if frame_skip == "auto":  # known ego-motion is frame to frame
+            frame_skip = 0 if egomotion is not None else None
+        self.every = None if frame_skip is None else frame_skip + 1
+        self.held, self.first_s = None, 0.0
 
     def __call__(self, frame, time_s=0.0):
         h, w = frame.shape[:2]
-        if self.index % self.every == 0:
+        if self.index == 0:
+            self.first_s = time_s
+        elif self.every is None:  # "auto", from the first interval
+            interval = time_s - self.first_s
+            self.every = auto_frame_skip(1 / interval if interval > 0 else None) + 1
+        if self.index == 0 or self.index % self.every == 0:
             self.held = self.md.process(frame, self.index, time_s).input_mask(w, h)
         self.index += 1
         return self.held

@@ -9,7 +9,8 @@ Each variant is a JSON object of config sections, named as in a config file
 (``fit``, ``velocity_ray``, ``velocity_animate``, ``track``, ``dense_flow``:
 ``motiondetect.app.settings.SECTIONS``), each with the fields it changes;
 ``"detector"`` picks the detectors (default ``both``), ``"frame_skip"`` judges
-every (n+1)-th frame and holds its mask on the others (``--frame-skip``), and ``"peer"`` runs one
+every (n+1)-th frame and holds its mask on the others (``--frame-skip``;
+default ``"auto"``, as the tool), and ``"peer"`` runs one
 of ``compare.py``'s peers instead (``DenseResidual``, ``Mog2``, ...). Data sets
 are the prefixes of ``compare.py``'s sequence names: ``sample``, ``davis``,
 ``ucsd``, ``sbi``, ``otb``, ``fox``, and the fresh renders of
@@ -44,7 +45,7 @@ def method(name: str, spec: dict):
         made.name = name
         return made
     detector = spec.pop("detector", "both")
-    skip = spec.pop("frame_skip", 0)
+    skip = spec.pop("frame_skip", "auto")
     configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
     return compare.Ours(detector, label=name, configs=configs, frame_skip=skip)
 
