@@ -8,7 +8,8 @@ r"""Variants of motiondetect side by side, pooled per data set (how docs/detecto
 Each variant is a JSON object of config sections, named as in a config file
 (``fit``, ``velocity_ray``, ``velocity_animate``, ``track``, ``dense_flow``:
 ``motiondetect.app.settings.SECTIONS``), each with the fields it changes;
-``"detector"`` picks the detectors (default ``both``), ``"frame_skip"`` judges
+``"detector"`` picks the detectors (default ``both``), ``"measure"`` the
+measurement (``velocity`` or the paper's ``normal``), ``"frame_skip"`` judges
 every (n+1)-th frame and holds its mask on the others (``--frame-skip``;
 default ``"auto"``, as the tool), and ``"peer"`` runs one
 of ``compare.py``'s peers instead (``DenseResidual``, ``Mog2``, ...). Data sets
@@ -46,8 +47,9 @@ def method(name: str, spec: dict):
         return made
     detector = spec.pop("detector", "both")
     skip = spec.pop("frame_skip", "auto")
+    measure = spec.pop("measure", "velocity")
     configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
-    return compare.Ours(detector, label=name, configs=configs, frame_skip=skip)
+    return compare.Ours(detector, label=name, measure=measure, configs=configs, frame_skip=skip)
 
 
 def _run(job: tuple) -> tuple[str, dict[str, Counts]]:
