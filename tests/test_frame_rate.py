@@ -17,7 +17,8 @@ from .test_cli import check_outputs, invoke, write_video
 @pytest.mark.parametrize(
     ("fps", "skip"),
     [(None, 0), (0.0, 0), (float("nan"), 0), (12.0, 0), (23.976, 0), (30.0, 0), (44.0, 0),
-     (46.0, 1), (50.0, 1), (59.94, 1), (60.0, 1), (90.0, 2), (120.0, 3), (240.0, 7)],
+     (46.0, 1), (50.0, 1), (59.94, 1), (60.0, 1), (90.0, 2), (120.0, 3), (240.0, 7),
+     (1000.0, 7), (10000.0, 7), (float("inf"), 0)],
 )  # fmt: skip
 def test_auto_frame_skip_judges_one_frame_about_every_thirtieth_of_a_second(fps, skip):
     assert auto_frame_skip(fps) == skip

@@ -13,6 +13,10 @@ F = TypeVar("F")
 #: Frame rate the detectors' tolerances were measured at: the shared clips run
 #: at 20-30 frames/s (docs/detectors.md, "Judged at about 30 frames a second").
 REFERENCE_FPS = 30.0
+#: Most frames ``auto`` skips: one judged frame in 8, as at 240 frames/s (a
+#: phone's slow motion). Timestamps that claim more are likelier wrong than
+#: the camera that fast, and a file timed wrongly then still gets judged.
+MAX_AUTO_SKIP = 7
 
 
 def auto_frame_skip(fps: float | None) -> int:
@@ -22,11 +26,12 @@ def auto_frame_skip(fps: float | None) -> int:
     A camera at 60 frames/s moves half as far between frames as at 30, and a
     slow mover's motion then sinks into the measurement's noise; judging
     every 2nd frame gives the detectors the motion they were measured on,
-    for half the work. ``fps`` unknown or not positive: 0.
+    for half the work. ``fps`` unknown or not positive: 0; at most
+    :data:`MAX_AUTO_SKIP`.
     """
     if fps is None or not math.isfinite(fps) or fps <= 0:
         return 0
-    return max(0, int(fps / REFERENCE_FPS + 0.5) - 1)
+    return min(MAX_AUTO_SKIP, max(0, int(fps / REFERENCE_FPS + 0.5) - 1))
 
 
 def judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:
