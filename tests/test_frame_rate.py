@@ -8,6 +8,7 @@ import pytest
 
 import motiondetect
 from motiondetect.app.settings import SettingsError, make_settings
+from motiondetect.detection.events import EventRules
 from motiondetect.detection.streaming import auto_frame_skip
 
 from .scenes import scene
@@ -93,3 +94,15 @@ def test_known_egomotion_judges_every_frame_at_any_rate(tmp_path):
     assert make_settings({"frame_skip": 2}).skipped_frames(24.0) == 2
     with pytest.raises(SettingsError, match="cannot be combined"):
         make_settings({"frame_skip": 1, "egomotion": str(ego)})
+
+
+def test_event_rules_in_frames_count_judged_frames_under_auto():
+    """At 60 frames/s ``auto`` judges every 2nd frame, so rules given in frames
+    span the time they span at 30; times, and a numeric ``frame_skip``, are
+    as given."""
+    assert make_settings({}).event_rules(60.0) == EventRules(6, 10, 10)
+    assert make_settings({}).event_rules(30.0) == EventRules(3, 5, 5)
+    assert make_settings({"min_event_frames": 4}).event_rules(120.0).min_frames == 16
+    assert make_settings({"frame_skip": 1}).event_rules(60.0) == EventRules(3, 5, 5)
+    timed = make_settings({"min_event": "0.5s", "pad": "10f"}).event_rules(60.0)
+    assert (timed.min_frames, timed.merge_gap, timed.pad) == (30, 10, 10)

@@ -193,10 +193,16 @@ class Settings:
         return self.configs["track"].persistence
 
     def event_rules(self, fps: float) -> EventRules:
-        """Event rules in frames, with any time given converted at ``fps``."""
+        """Event rules in frames, with any time given converted at ``fps``.
+
+        With ``frame_skip`` "auto", rules given in frames count judged
+        frames (about 1/30 s apart), so that an input at 60 frames/s gets the
+        events it would get at 30; with a number, they count input frames.
+        """
+        judged = self.skipped_frames(fps) + 1 if self.frame_skip == AUTO else 1
 
         def frames(spec: TimeSpec | None, fallback: int) -> int:
-            return fallback if spec is None else spec.frames(fps)
+            return fallback * judged if spec is None else spec.frames(fps)
 
         return EventRules(
             max(1, frames(self.min_event, self.min_event_frames)),
