@@ -30,7 +30,7 @@ from common import SHARED_DATA, SYNTH_SET
 
 from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.detection.streaming import auto_frame_skip
+from motiondetect.detection.streaming import AUTO, auto_frame_skip
 from motiondetect.io.files import last_number
 from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import (
@@ -145,12 +145,12 @@ class Ours:
 
     def __init__(
         self, detector="both", egomotion=None, label=None, measure="velocity", configs=(),
-        frame_skip="auto",
+        frame_skip=AUTO,
     ):  # fmt: skip
         self.md = MotionDetector(detector, *configs, measure=measure, egomotion=egomotion)
         self.name = label or f"motiondetect {measure} {detector}"
         self.index = 0
-        if frame_skip == "auto":  # known ego-motion is frame to frame
+        if frame_skip == AUTO:  # known ego-motion is frame to frame
             frame_skip = 0 if egomotion is not None else None
         self.every = None if frame_skip is None else frame_skip + 1
         self.held, self.first_s = None, 0.0

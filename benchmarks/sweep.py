@@ -46,7 +46,7 @@ def method(name: str, spec: dict):
         made.name = name
         return made
     detector = spec.pop("detector", "both")
-    skip = spec.pop("frame_skip", "auto")
+    skip = spec.pop("frame_skip", compare.AUTO)
     measure = spec.pop("measure", "velocity")
     configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
     return compare.Ours(detector, label=name, measure=measure, configs=configs, frame_skip=skip)

@@ -21,6 +21,15 @@ from motiondetect.app.settings import (
 log = logging.getLogger("motiondetect")
 
 
+def _number_or_word(_ctx, _param, value: str | None) -> int | str | None:
+    """An option's text as a whole number where it is one ("auto" stays a word);
+    the settings check what it may be (a click callback)."""
+    try:
+        return int(value) if value is not None else None
+    except ValueError:
+        return value
+
+
 def _d(key: str) -> str:
     value = default_of(key)
     if isinstance(value, dict):
@@ -148,7 +157,7 @@ def _d(key: str) -> str:
 @click.option(
     "--frame-skip",
     metavar="N|auto",
-    callback=lambda _ctx, _param, value: int(value) if value and value.isdigit() else value,
+    callback=_number_or_word,
     help="Judge one frame in N+1; the N after it carry its detections, marked held_from "
     "in frames.jsonl. About N+1 times faster, coarser in time; auto: one judged frame "
     f"about every 1/30 s, so 1 at 60 fps and 0 below 45 fps {_d('frame_skip')}.",

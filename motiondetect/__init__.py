@@ -30,7 +30,7 @@ logging.getLogger("motiondetect").addHandler(logging.NullHandler())
 from motiondetect.detection.base import Detector, DetectorOutput, registry  # noqa: E402
 from motiondetect.detection.detector import FrameResult, MotionDetector  # noqa: E402
 from motiondetect.detection.regions import Region  # noqa: E402
-from motiondetect.detection.streaming import auto_frame_skip  # noqa: E402
+from motiondetect.detection.streaming import AUTO, frames_to_skip  # noqa: E402
 from motiondetect.io.source import SourceFrame  # noqa: E402
 from motiondetect.io.video import FrameSource, VideoError, VideoInfo, open_source  # noqa: E402
 
@@ -57,7 +57,7 @@ def detect(
     measure: str = "velocity",
     fps: float = 30.0,
     persistence: int | None = None,
-    frame_skip: int | str = "auto",
+    frame_skip: int | str = AUTO,
 ) -> Iterator[FrameResult]:
     """Detect independent motion in every frame of ``source``, lazily.
 
@@ -85,11 +85,9 @@ def detect(
     md = MotionDetector(detector, *configs, measure=measure, persistence=persistence)
     if isinstance(source, (str, Path)):
         with open_source(source) as frames:
-            skip = auto_frame_skip(frames.info.fps) if frame_skip == "auto" else frame_skip
-            for _, result in md.stream(frames, skip):
+            for _, result in md.stream(frames, frames_to_skip(frame_skip, frames.info.fps)):
                 yield result
         return
     in_memory = (SourceFrame(i, i / fps, image) for i, image in enumerate(source))
-    skip = auto_frame_skip(fps) if frame_skip == "auto" else frame_skip
-    for _, result in md.stream(in_memory, skip):
+    for _, result in md.stream(in_memory, frames_to_skip(frame_skip, fps)):
         yield result

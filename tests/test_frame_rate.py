@@ -83,6 +83,9 @@ def test_a_frame_skip_that_is_not_a_number_or_auto_is_one_line_error(tmp_path):
     assert result.exit_code == 2
     assert "--frame-skip must be auto or a whole number, got 'fast'" in result.output
     assert "Traceback" not in result.output
+    result = invoke("detect", video, "-o", tmp_path / "out", "--frame-skip", "-1")
+    assert result.exit_code == 2
+    assert "--frame-skip must be at least 0, but got -1" in result.output
 
 
 def test_known_egomotion_judges_every_frame_at_any_rate(tmp_path):

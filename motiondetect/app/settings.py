@@ -35,7 +35,7 @@ from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.events import EventRules
 from motiondetect.detection.objects import TrackConfig
-from motiondetect.detection.streaming import auto_frame_skip
+from motiondetect.detection.streaming import AUTO, frames_to_skip
 from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.normal_flow import StageConfig
 
@@ -119,8 +119,6 @@ RUN_CHECKS: dict[str, tuple] = {
 _FLAGS = ("masks", "video", "overwrite", "recursive", "extract_clips", "clips_annotated")
 _FLAGS += ("timeline", "thumbnails")
 _TIMES = ("min_event", "merge_gap", "pad", "start", "end")
-#: ``frame_skip``'s value that sets it from the input's frame rate.
-AUTO = "auto"
 
 
 class SettingsError(ValueError):
@@ -215,9 +213,9 @@ class Settings:
         ``frame_skip``, or with "auto" one judged frame about every 1/30 s
         (:func:`~motiondetect.detection.streaming.auto_frame_skip`); known
         ego-motion, given frame to frame, judges every frame."""
-        if self.frame_skip != AUTO:
-            return int(self.frame_skip)
-        return 0 if self.egomotion is not None else auto_frame_skip(fps)
+        if self.frame_skip == AUTO and self.egomotion is not None:
+            return 0
+        return frames_to_skip(self.frame_skip, fps)
 
     def in_range(self, index: int, time_s: float) -> tuple[bool, bool]:
         """(before the start, past the end) for a frame."""

@@ -10,6 +10,8 @@ from typing import TypeVar
 
 F = TypeVar("F")
 
+#: ``frame_skip`` that judges one frame about every 1/30 s (:func:`auto_frame_skip`).
+AUTO = "auto"
 #: Frame rate the detectors' tolerances were measured at: the shared clips run
 #: at 20-30 frames/s (docs/detectors.md, "Judged at about 30 frames a second").
 REFERENCE_FPS = 30.0
@@ -32,6 +34,12 @@ def auto_frame_skip(fps: float | None) -> int:
     if fps is None or not math.isfinite(fps) or fps <= 0:
         return 0
     return min(MAX_AUTO_SKIP, max(0, int(fps / REFERENCE_FPS + 0.5) - 1))
+
+
+def frames_to_skip(frame_skip: int | str, fps: float | None) -> int:
+    """``frame_skip`` as a number of frames: :data:`AUTO` resolved at ``fps``
+    (:func:`auto_frame_skip`), a number as it is."""
+    return auto_frame_skip(fps) if frame_skip == AUTO else int(frame_skip)
 
 
 def judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F | None]]:
