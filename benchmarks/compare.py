@@ -1,15 +1,11 @@
-"""motiondetect against three peer baselines, scored with the same evaluator.
+"""motiondetect against four peer baselines, scored with the same evaluator.
 
     python benchmarks/compare.py                  # writes docs/results.md
     python benchmarks/compare.py --quick          # sample videos only
 
-Peers, each producing a 0/255 mask per frame at input resolution:
-
-* frame differencing: |I_t - I_{t-1}| > 25 after a 5x5 blur, then a 3x3 opening;
-* OpenCV MOG2 (``detectShadows=False``), as DVR-Scan uses it;
-* homography-compensated differencing: ORB features, brute-force Hamming
-  matching, RANSAC homography, warp the previous frame, difference > 25,
-  3x3 opening.
+Peers (``peers.py``), each producing a 0/255 mask per frame at input
+resolution: frame differencing, OpenCV MOG2 as DVR-Scan uses it,
+homography-compensated differencing and the dense residual of issue 13.
 
 Sequences: the committed sample videos (synthetic, exact ground truth) and,
 when present, the labelled clips of ../shared/data (DAVIS, UCSD, SBI), the
@@ -27,6 +23,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 from common import SHARED_DATA, SYNTH_SET
+from peers import DenseResidual, FrameDiff, HomographyDiff, Mog2
 
 from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.detection.detector import MotionDetector
@@ -43,97 +40,6 @@ from motiondetect.tools.evaluate import (
 
 ROOT = Path(__file__).resolve().parents[1]
 WARMUP = 2
-
-
-class FrameDiff:
-    name = "frame differencing"
-
-    def __init__(self):
-        self.prev = None
-
-    def __call__(self, frame, time_s=0.0):
-        g = cv2.GaussianBlur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), (5, 5), 0)
-        prev, self.prev = self.prev, g
-        if prev is None:
-            return np.zeros_like(g)
-        mask = (cv2.absdiff(g, prev) > 25).astype(np.uint8) * 255
-        return cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-
-
-class Mog2:
-    name = "OpenCV MOG2"
-
-    def __init__(self):
-        self.sub = cv2.createBackgroundSubtractorMOG2(detectShadows=False)
-
-    def __call__(self, frame, time_s=0.0):
-        return np.where(self.sub.apply(frame) > 127, 255, 0).astype(np.uint8)
-
-
-class HomographyDiff:
-    name = "homography-compensated diff"
-
-    def __init__(self):
-        self.orb = cv2.ORB_create(1000)
-        self.matcher = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True)
-        self.prev = None
-
-    def __call__(self, frame, time_s=0.0):
-        g = cv2.GaussianBlur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), (5, 5), 0)
-        kp, des = self.orb.detectAndCompute(g, None)
-        prev, self.prev = self.prev, (g, kp, des)
-        if prev is None or des is None or prev[2] is None:
-            return np.zeros_like(g)
-        matches = self.matcher.match(prev[2], des)
-        if len(matches) < 8:
-            return np.zeros_like(g)
-        src = np.float32([prev[1][m.queryIdx].pt for m in matches])
-        dst = np.float32([kp[m.trainIdx].pt for m in matches])
-        hom, _ = cv2.findHomography(src, dst, cv2.RANSAC, 3.0)
-        if hom is None:
-            return np.zeros_like(g)
-        h, w = g.shape
-        warped = cv2.warpPerspective(prev[0], hom, (w, h))
-        valid = cv2.warpPerspective(np.ones_like(g), hom, (w, h)) > 0
-        mask = ((cv2.absdiff(g, warped) > 25) & valid).astype(np.uint8) * 255
-        return cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-
-
-class DenseResidual:
-    """DIS flow at 320 px, RANSAC homography on a 4-px grid, |flow - H flow| > 1.5 px,
-    3x3 opening, kept only within 4 px of the previous frame's flags (issue 13)."""
-
-    name = "dense residual"
-
-    def __init__(self):
-        self.dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_FAST)
-        self.prev = None
-        self.prev_mask = None
-
-    def __call__(self, frame, time_s=0.0):
-        h0, w0 = frame.shape[:2]
-        s = 320 / max(h0, w0)
-        small = cv2.resize(frame, (round(w0 * s), round(h0 * s)), interpolation=cv2.INTER_AREA)
-        g = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
-        prev, self.prev = self.prev, g
-        if prev is None:
-            return np.zeros((h0, w0), np.uint8)
-        flow = self.dis.calc(prev, g, None)
-        h, w = g.shape
-        ys, xs = np.mgrid[0:h:4, 0:w:4].astype(np.float32)
-        src = np.stack([xs.ravel(), ys.ravel()], 1)
-        hom, _ = cv2.findHomography(src, src + flow[0:h:4, 0:w:4].reshape(-1, 2), cv2.RANSAC, 1.0)
-        if hom is None:
-            return np.zeros((h0, w0), np.uint8)
-        yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-        grid = np.stack([xx, yy], -1)
-        plane = cv2.perspectiveTransform(grid.reshape(-1, 1, 2), hom).reshape(h, w, 2) - grid
-        mask = (np.linalg.norm(flow - plane, axis=2) > 1.5).astype(np.uint8)
-        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-        prev_mask, self.prev_mask = self.prev_mask, mask
-        near = cv2.dilate(prev_mask, np.ones((9, 9), np.uint8)) if prev_mask is not None else 0
-        mask = mask & near
-        return cv2.resize(mask * 255, (w0, h0), interpolation=cv2.INTER_NEAREST)
 
 
 class Ours:
@@ -257,6 +163,70 @@ DEFAULT = "motiondetect velocity both"
 NORMAL = "motiondetect normal both"
 
 
+#: Why the numbers come out as they do, as we read the masks (after the verdicts).
+WHY = [
+    "",
+    "Why, as we read the masks: by default the velocity path tests the whole",
+    "residual of the fitted plane (no epipole) against a tolerance that grows with",
+    "the frame's measured residual spread. Parallax spread over the frame passes;",
+    "parallax concentrated in a few near objects (the mounted head on the fox",
+    "clip's wall, the synthetic samples' near boxes) exceeds it and is flagged,",
+    "which is most of the false alarms. Such an object is dropped once its pixels",
+    "have kept, for two frames running, the depth on their constraint rays (from the",
+    "plane's decomposition under a lens prior) that the frame before measured; that",
+    "needs a measurable camera translation and a lens near the prior, and on the",
+    "fox clip it removes about half of the false alarms (docs/maths.md, section 7);",
+    "most of the rest are the animate detector's, on frames where the handheld",
+    "camera's translation jumps and every rigid point's parallax changes with it.",
+    "Along straight edges and stripes the flow",
+    "is not measured but filled in (the aperture problem), so a seed is tested only",
+    "on the part of the residual the image determines, and only where the flow",
+    "measured the other way confirms the velocity (DIS's matches to the wrong",
+    "repeat of a texture, occlusions and content entering the view fail that",
+    "check). Moving water and sky (UCSD, DAVIS blackswan and surf)",
+    "are real motion that the labels leave out. MOG2 and frame differencing flag",
+    "most of every moving-camera frame; on static cameras (SBI) MOG2 is the tool",
+    "built for the job.",
+]
+
+
+def _group_reading(group: str, pooled: dict[str, Counts]) -> str:
+    """One data set's verdict: the default against the best peer and the normal path."""
+    ours = pooled[f"{group}|{DEFAULT}"].metrics()
+    normal = pooled[f"{group}|{NORMAL}"].metrics()
+    peers = {
+        key.split("|")[1]: c.metrics()
+        for key, c in pooled.items()
+        if key.startswith(f"{group}|") and "|motiondetect" not in key
+    }
+    fa = "false_alarm_regions_per_frame"
+    if box_scored(pooled[f"{group}|{DEFAULT}"]):
+        recall = "object_recall"
+        best = max(peers, key=lambda k: peers[k][recall] or 0.0)
+        return (
+            f"- **{group}** (boxes: object recall only, which a method flagging the "
+            f"whole frame passes): {fmt(ours[recall])} against {fmt(peers[best][recall])} "
+            f"({best}) and {fmt(normal[recall])} (normal path)."
+        )
+    if ours["cell_f1"] is None or ours["object_recall"] is None:
+        least = min(peers, key=lambda k: peers[k][fa])
+        return (
+            f"- **{group}**: {fmt(ours[fa])} false-alarm regions per frame, against "
+            f"{fmt(peers[least][fa])} for {least} (the fewest among peers) and "
+            f"{fmt(normal[fa])} for the normal path."
+        )
+    best = max(peers, key=lambda k: peers[k]["cell_f1"] or 0.0)
+    verdict = "wins" if ours["cell_f1"] > (peers[best]["cell_f1"] or 0.0) else "loses"
+    return (
+        f"- **{group}**: {verdict}. Cell F1 {fmt(ours['cell_f1'], 3)} against "
+        f"{fmt(peers[best]['cell_f1'], 3)} ({best}) and {fmt(normal['cell_f1'], 3)} (normal "
+        f"path); object recall {fmt(ours['object_recall'])} against "
+        f"{fmt(peers[best]['object_recall'])} and {fmt(normal['object_recall'])}; "
+        f"{fmt(ours[fa])} false-alarm regions per frame against {fmt(peers[best][fa])} "
+        f"and {fmt(normal[fa])}."
+    )
+
+
 def reading(pooled: dict[str, Counts]) -> list[str]:
     """The results in words, per data set, from the pooled numbers themselves."""
     groups = dict.fromkeys(key.split("|")[0] for key in pooled)
@@ -266,67 +236,7 @@ def reading(pooled: dict[str, Counts]) -> list[str]:
         "paper's normal-flow path (`" + NORMAL + "`):",
         "",
     ]
-    for group in groups:
-        ours = pooled[f"{group}|{DEFAULT}"].metrics()
-        normal = pooled[f"{group}|{NORMAL}"].metrics()
-        peers = {
-            key.split("|")[1]: c.metrics()
-            for key, c in pooled.items()
-            if key.startswith(f"{group}|") and "|motiondetect" not in key
-        }
-        fa = "false_alarm_regions_per_frame"
-        if box_scored(pooled[f"{group}|{DEFAULT}"]):
-            recall = "object_recall"
-            best = max(peers, key=lambda k: peers[k][recall] or 0.0)
-            lines.append(
-                f"- **{group}** (boxes: object recall only, which a method flagging the "
-                f"whole frame passes): {fmt(ours[recall])} against {fmt(peers[best][recall])} "
-                f"({best}) and {fmt(normal[recall])} (normal path)."
-            )
-            continue
-        if ours["cell_f1"] is None or ours["object_recall"] is None:
-            least = min(peers, key=lambda k: peers[k][fa])
-            lines.append(
-                f"- **{group}**: {fmt(ours[fa])} false-alarm regions per frame, against "
-                f"{fmt(peers[least][fa])} for {least} (the fewest among peers) and "
-                f"{fmt(normal[fa])} for the normal path."
-            )
-            continue
-        best = max(peers, key=lambda k: peers[k]["cell_f1"] or 0.0)
-        verdict = "wins" if ours["cell_f1"] > (peers[best]["cell_f1"] or 0.0) else "loses"
-        lines.append(
-            f"- **{group}**: {verdict}. Cell F1 {fmt(ours['cell_f1'], 3)} against "
-            f"{fmt(peers[best]['cell_f1'], 3)} ({best}) and {fmt(normal['cell_f1'], 3)} (normal "
-            f"path); object recall {fmt(ours['object_recall'])} against "
-            f"{fmt(peers[best]['object_recall'])} and {fmt(normal['object_recall'])}; "
-            f"{fmt(ours[fa])} false-alarm regions per frame against {fmt(peers[best][fa])} "
-            f"and {fmt(normal[fa])}."
-        )
-    lines += [
-        "",
-        "Why, as we read the masks: by default the velocity path tests the whole",
-        "residual of the fitted plane (no epipole) against a tolerance that grows with",
-        "the frame's measured residual spread. Parallax spread over the frame passes;",
-        "parallax concentrated in a few near objects (the mounted head on the fox",
-        "clip's wall, the synthetic samples' near boxes) exceeds it and is flagged,",
-        "which is most of the false alarms. Such an object is dropped once its pixels",
-        "have kept, for two frames running, the depth on their constraint rays (from the",
-        "plane's decomposition under a lens prior) that the frame before measured; that",
-        "needs a measurable camera translation and a lens near the prior, and on the",
-        "fox clip it removes about half of the false alarms (docs/maths.md, section 7);",
-        "most of the rest are the animate detector's, on frames where the handheld",
-        "camera's translation jumps and every rigid point's parallax changes with it.",
-        "Along straight edges and stripes the flow",
-        "is not measured but filled in (the aperture problem), so a seed is tested only",
-        "on the part of the residual the image determines, and only where the flow",
-        "measured the other way confirms the velocity (DIS's matches to the wrong",
-        "repeat of a texture, occlusions and content entering the view fail that",
-        "check). Moving water and sky (UCSD, DAVIS blackswan and surf)",
-        "are real motion that the labels leave out. MOG2 and frame differencing flag",
-        "most of every moving-camera frame; on static cameras (SBI) MOG2 is the tool",
-        "built for the job.",
-    ]
-    return lines
+    return lines + [_group_reading(group, pooled) for group in groups] + WHY
 
 
 def main() -> None:
@@ -340,34 +250,41 @@ def main() -> None:
     rows = []
     pooled: dict[str, Counts] = {}
     for name, source, gt, ego_file in sequences(args.quick):
-        methods = [
-            FrameDiff(),
-            Mog2(),
-            HomographyDiff(),
-            DenseResidual(),
-            Ours("both"),
-            Ours("constraint-ray"),
-            Ours("animate"),
-            Ours("both", measure="normal"),
-        ]
-        if ego_file is not None:
-            numbers = None
-            if source.is_dir():
-                with open_source(source) as src:
-                    numbers = src.frame_numbers
-            methods.append(
-                Ours(
-                    "constraint-ray",
-                    EgoMotion.load(ego_file, numbers),
-                    "motiondetect known ego-motion",
-                )
-            )
         t0 = time.perf_counter()
-        result = run_sequence(source, gt, methods)
+        result = run_sequence(source, gt, every_method(source, ego_file))
         print(f"{name}: {time.perf_counter() - t0:.1f} s", flush=True)
         for method, (counts, secs) in result.items():
             rows.append((name, method, counts, counts.frames / secs if secs else 0.0))
             pooled.setdefault(f"{name.split('/')[0]}|{method}", Counts()).add(counts)
+    lines = report(rows, pooled)
+    args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    print("\n".join(lines[: lines.index("## Per sequence")]))
+
+
+def every_method(source: Path, ego_file: Path | None) -> list:
+    """The peers and motiondetect's variants, and known ego-motion where a clip has it."""
+    methods = [
+        FrameDiff(),
+        Mog2(),
+        HomographyDiff(),
+        DenseResidual(),
+        Ours("both"),
+        Ours("constraint-ray"),
+        Ours("animate"),
+        Ours("both", measure="normal"),
+    ]
+    if ego_file is not None:
+        numbers = None
+        if source.is_dir():
+            with open_source(source) as src:
+                numbers = src.frame_numbers
+        ego = EgoMotion.load(ego_file, numbers)
+        methods.append(Ours("constraint-ray", ego, "motiondetect known ego-motion"))
+    return methods
+
+
+def report(rows: list, pooled: dict[str, Counts]) -> list[str]:
+    """docs/results.md's lines: the reading, the pooled table, the per-sequence table."""
     lines = [
         "# Results against peers",
         "",
@@ -402,8 +319,7 @@ def main() -> None:
     ]
     for name, method, counts, fps in rows:
         lines.append(row(name, method, counts, f"{fps:.0f}"))
-    args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    print("\n".join(lines[: lines.index("## Per sequence")]))
+    return lines
 
 
 if __name__ == "__main__":

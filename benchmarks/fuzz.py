@@ -21,6 +21,40 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import make_pan_clip  # noqa: E402
 
 
+def damaged(data: bytearray, rng: np.random.Generator) -> bytes:
+    """``data`` with random bytes flipped, cut short, or a block overwritten with noise."""
+    mode = rng.integers(0, 3)
+    if mode == 0:  # flip random bytes
+        for _ in range(int(rng.integers(1, 200))):
+            data[int(rng.integers(0, len(data)))] = int(rng.integers(0, 256))
+    elif mode == 1:  # truncate
+        data = data[: int(rng.integers(0, len(data)))]
+    else:  # overwrite a block with noise
+        start = int(rng.integers(0, len(data)))
+        block = rng.integers(0, 256, int(rng.integers(1, 4096)), dtype=np.uint8)
+        data[start : start + len(block)] = block.tobytes()[: len(data) - start]
+    return bytes(data)
+
+
+def outcome(path: Path, out: Path, timeout: float) -> tuple[str, str]:
+    """What ``detect`` made of one damaged file, and its stderr."""
+    command = [
+        sys.executable, "-m", "motiondetect_cli.main", "detect", str(path),
+        "-o", str(out), "-q", "--no-video", "--overwrite",
+    ]  # fmt: skip
+    try:
+        proc = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return "timeout", ""
+    if "Traceback" in proc.stderr:
+        return "traceback", proc.stderr
+    if proc.returncode == 0:
+        return "processed" + (" (partial)" if "truncated" in proc.stderr else ""), ""
+    if proc.returncode == 1:
+        return "failed cleanly", ""
+    return f"exit {proc.returncode}", ""
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", type=int, default=200)
@@ -36,50 +70,14 @@ def main() -> None:
             for k, ext in enumerate((".mp4", ".avi", ".mkv"))
         ]
         for case in range(args.cases):
-            data = bytearray(sources[case % len(sources)].read_bytes())
-            mode = rng.integers(0, 3)
-            if mode == 0:  # flip random bytes
-                for _ in range(int(rng.integers(1, 200))):
-                    data[int(rng.integers(0, len(data)))] = int(rng.integers(0, 256))
-            elif mode == 1:  # truncate
-                data = data[: int(rng.integers(0, len(data)))]
-            else:  # overwrite a block with noise
-                start = int(rng.integers(0, len(data)))
-                block = rng.integers(0, 256, int(rng.integers(1, 4096)), dtype=np.uint8)
-                data[start : start + len(block)] = block.tobytes()[: len(data) - start]
-            path = tmp / f"case{case}{sources[case % len(sources)].suffix}"
-            path.write_bytes(bytes(data))
-            try:
-                proc = subprocess.run(
-                    [
-                        sys.executable,
-                        "-m",
-                        "motiondetect_cli.main",
-                        "detect",
-                        str(path),
-                        "-o",
-                        str(tmp / "out"),
-                        "-q",
-                        "--no-video",
-                        "--overwrite",
-                    ],
-                    capture_output=True,
-                    text=True,
-                    timeout=args.timeout,
-                )
-            except subprocess.TimeoutExpired:
-                counts["timeout"] += 1
-                continue
-            if "Traceback" in proc.stderr:
-                counts["traceback"] += 1
-                print(f"case {case}: traceback\n{proc.stderr}")
-            elif proc.returncode == 0:
-                counts["processed" + (" (partial)" if "truncated" in proc.stderr else "")] += 1
-            elif proc.returncode == 1:
-                counts["failed cleanly"] += 1
-            else:
-                counts[f"exit {proc.returncode}"] += 1
-            path.unlink()
+            source = sources[case % len(sources)]
+            path = tmp / f"case{case}{source.suffix}"
+            path.write_bytes(damaged(bytearray(source.read_bytes()), rng))
+            kind, stderr = outcome(path, tmp / "out", args.timeout)
+            counts[kind] += 1
+            if kind == "traceback":
+                print(f"case {case}: traceback\n{stderr}")
+            path.unlink(missing_ok=True)
     print(
         f"{args.cases} cases, seed {args.seed}: "
         + ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))

@@ -186,6 +186,32 @@ def detection_figure(
     raise ValueError(f"{path} has fewer than {at + 1} frames")
 
 
+def clip_figures(clip: Path, frame: int, out: Path) -> None:
+    """The figures of one given clip (``--clip``), around ``frame``."""
+    frames = first_frames(clip, 2, skip=frame - 1)
+    cv2.imwrite(str(out / "clip_normal_flow.png"), normal_flow_figure(frames, clip.name))
+    cv2.imwrite(str(out / "clip_detection.png"), detection_figure(clip, frame))
+    cv2.imwrite(str(out / "clip_detection_animate.png"), detection_figure(clip, frame, "animate"))
+    cv2.imwrite(
+        str(out / "clip_detection_animate_flow_only.png"),
+        detection_figure(clip, frame, "animate", withhold_pixels=True),
+    )
+
+
+def rotation_zoom_pair() -> list[np.ndarray]:
+    """A photograph rotated by -0.75 and 0.75 deg and zoomed by -0.6 and 0.6 %."""
+    photo = data.astronaut()
+    h, w = photo.shape[:2]
+    pair = []
+    for sign in (-1, 1):
+        m = cv2.getRotationMatrix2D((w / 2, h / 2), sign * 0.75, 1.0 + sign * 0.006)
+        flags = cv2.INTER_CUBIC
+        pair.append(
+            cv2.warpAffine(photo[..., ::-1], m, (w, h), flags=flags, borderMode=cv2.BORDER_REFLECT)
+        )
+    return pair
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--clip", type=Path)
@@ -194,33 +220,13 @@ def main() -> None:
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     if args.clip is not None:
-        frames = first_frames(args.clip, 2, skip=args.frame - 1)
-        cv2.imwrite(
-            str(args.out / "clip_normal_flow.png"), normal_flow_figure(frames, args.clip.name)
-        )
-        cv2.imwrite(str(args.out / "clip_detection.png"), detection_figure(args.clip, args.frame))
-        cv2.imwrite(
-            str(args.out / "clip_detection_animate.png"),
-            detection_figure(args.clip, args.frame, "animate"),
-        )
-        cv2.imwrite(
-            str(args.out / "clip_detection_animate_flow_only.png"),
-            detection_figure(args.clip, args.frame, "animate", withhold_pixels=True),
-        )
+        clip_figures(args.clip, args.frame, args.out)
         return
-    photo = data.astronaut()
-    h, w = photo.shape[:2]
-    pair = []
-    for sign in (-1, 1):
-        m = cv2.getRotationMatrix2D((w / 2, h / 2), sign * 0.75, 1.0 + sign * 0.006)
-        pair.append(
-            cv2.warpAffine(
-                photo[..., ::-1], m, (w, h), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT
-            )
-        )
     cv2.imwrite(
         str(args.out / "normal_flow_rotation_zoom.png"),
-        normal_flow_figure(pair, "photograph rotating 1.5 deg and zooming 1.2 %/frame"),
+        normal_flow_figure(
+            rotation_zoom_pair(), "photograph rotating 1.5 deg and zooming 1.2 %/frame"
+        ),
     )
     samples = ROOT / "sample_videos"
     clip = samples / "uniform_mixed" / "video.mp4"

@@ -1,4 +1,5 @@
-"""Shared fixtures: exact synthetic motion and the location of real clips."""
+"""Shared fixtures: exact synthetic motion, a short panning clip with a mover,
+and the location of real clips."""
 
 from __future__ import annotations
 
@@ -8,6 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from skimage import data
+
+from .cli_outputs import write_video
+from .scenes import scene
 
 #: The real clips: $MOTIONDETECT_DATA, else ../shared/data beside the checkout.
 SHARED_DATA = Path(
@@ -39,3 +43,14 @@ def shared_path(*parts: str) -> Path:
     if not path.exists():
         pytest.skip(f"real data not present: {path}")
     return path
+
+
+@pytest.fixture(scope="session")
+def clip_frames():
+    """16 frames of a panning camera with a smooth mover (exact ground truth)."""
+    return [fr.image for fr in scene("pan", ("smooth",), frames=16)]
+
+
+@pytest.fixture(scope="session")
+def clip(tmp_path_factory, clip_frames) -> Path:
+    return write_video(tmp_path_factory.mktemp("clip") / "pan.mp4", clip_frames)

@@ -13,9 +13,9 @@ from motiondetect_cli.main import main
 
 from motiondetect.io.video import open_source
 
+from .cli_outputs import check_outputs, write_video
 from .media import encode
 from .scenes import scene
-from .test_cli import check_outputs, write_video
 
 
 def run(*args):

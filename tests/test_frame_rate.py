@@ -11,8 +11,8 @@ from motiondetect.app.settings import SettingsError, make_settings
 from motiondetect.detection.events import EventRules
 from motiondetect.detection.streaming import auto_frame_skip
 
+from .cli_outputs import check_outputs, invoke, write_video
 from .scenes import scene
-from .test_cli import check_outputs, invoke, write_video
 
 
 @pytest.mark.parametrize(

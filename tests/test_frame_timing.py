@@ -8,7 +8,7 @@ from motiondetect.detection.detector import MotionDetector
 from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.repeats import RepeatedFrames
 
-from .test_velocity import H, W, _pan_with_mover, background, paste
+from .velocity_scenes import H, W, background, pan_with_mover, paste
 
 
 def test_a_repeat_is_a_drop_to_codec_noise_from_the_usual_difference():
@@ -42,7 +42,7 @@ def test_a_repeated_frame_carries_the_last_result_and_changes_nothing_after():
     result is that of the clip without repeats, pixel for pixel. Measured as
     frames of their own (``repeat_level`` 0), the repeats show no motion
     and the mover is lost on them."""
-    clip = [image for image, _ in _pan_with_mover(lambda t: (60 + 3 * t, 100 + t), frames=16)]
+    clip = [image for image, _ in pan_with_mover(lambda t: (60 + 3 * t, 100 + t), frames=16)]
     shown = [i for i in range(16) for _ in range(2 if i % 4 == 3 else 1)]
     once = MotionDetector("both")
     plain = [once.process(clip[i], i, 0.0) for i in range(16)]

@@ -9,7 +9,7 @@ from motiondetect.detection.detector import MotionDetector
 from motiondetect.measurement.dense_flow import DenseFlowConfig
 from motiondetect.measurement.picture import BLEED_PX, PictureArea, content_bounds
 
-from .test_velocity import H, W, _pan_with_mover, background
+from .velocity_scenes import H, W, background, pan_with_mover
 
 BAR = 40  # px: each pillarbox bar around the 320x240 synthetic frames
 
@@ -105,7 +105,7 @@ def test_a_pillarboxed_pan_gives_the_unboxed_results_in_place():
     flagged in the bars. Measuring the whole frame instead (``bar_limit``
     0), the picture's edges, where content enters the view, are flagged
     on every frame (measured: 2-3 regions)."""
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=20)
+    clip = pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=20)
     plain = MotionDetector("both")
     boxed = MotionDetector("both")
     whole = MotionDetector("both", DenseFlowConfig(bar_limit=0))
@@ -155,7 +155,7 @@ def test_a_panelled_pan_is_measured_between_its_panels():
     the mover is found on every frame and nothing is flagged at the
     picture's edges; measuring the whole frame (``bar_limit`` 0), the
     picture's edges are flagged, where content enters it."""
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=20)
+    clip = pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=20)
 
     def run(config: DenseFlowConfig) -> tuple[list[int], list[bool]]:
         md = MotionDetector("both", config)
@@ -191,7 +191,7 @@ def test_a_grey_pillarboxed_picture_at_working_size_is_measured():
     """Grey frames whose picture needs no reduction (320x240 inside its bars,
     at most the working size) are measured on a crop of the frame, a view
     DIS cannot take as it is; the results are the unboxed clip's."""
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=8)
+    clip = pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=8)
     plain, boxed = MotionDetector("both"), MotionDetector("both")
     for t, (image, _) in enumerate(clip):
         grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image

@@ -15,8 +15,8 @@ from motiondetect.detection.objects import TrackConfig
 from motiondetect.io.video import open_source
 from motiondetect.tools.evaluate import evaluate_sequence
 
+from .cli_outputs import check_outputs
 from .conftest import shared_path
-from .test_cli import check_outputs
 
 pytestmark = pytest.mark.realdata
 

@@ -21,8 +21,8 @@ from motiondetect.app.inputs import InputJob
 from motiondetect.app.process import process_input
 from motiondetect.app.settings import make_settings
 
+from .cli_outputs import check_outputs, write_video
 from .scenes import scene
-from .test_cli import check_outputs, write_video
 
 EXE = [sys.executable, "-m", "motiondetect_cli.main"]
 

@@ -11,7 +11,7 @@ from motiondetect.detection.objects import TrackConfig
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
 from motiondetect.measurement.dense_flow import DenseFlow
 
-from .test_velocity import H, W, _pan_with_mover, background, paste
+from .velocity_scenes import H, W, background, pan_with_mover, paste
 
 CAPTION_TOP = 205  # px: the caption's band, bottom of the 320x240 frame
 
@@ -43,7 +43,7 @@ def test_a_burnt_in_caption_is_taken_out_and_the_mover_kept():
     been fixed to the screen for 30 frames of evidence it is not flagged
     again (measured: none from frame 30 on), while the mover above it is
     found on every frame, as before."""
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 60 + 0.5 * t), frames=60, pan=2.0)
+    clip = pan_with_mover(lambda t: (60 + 3 * t, 60 + 0.5 * t), frames=60, pan=2.0)
     off_band, off_found = _run(clip, TrackConfig(overlay_frames=0))
     on_band, on_found = _run(clip, TrackConfig())
     assert all(n > 0 for n in off_band[3:])  # the problem
@@ -73,7 +73,7 @@ def test_a_dim_part_of_the_vehicle_in_view_is_taken_out_and_the_mover_kept():
     rng = np.random.default_rng(3)
     source = background(0.0)[BONNET_TOP:, ::-1].astype(np.float32)
     fixed = (0.4 * (source - source.mean()) + 60).astype(np.uint8)
-    clip = _pan_with_mover(lambda t: (40 + 3 * t, 60 + 0.5 * t), frames=60, pan=2.0)
+    clip = pan_with_mover(lambda t: (40 + 3 * t, 60 + 0.5 * t), frames=60, pan=2.0)
     md = MotionDetector("both")
     low, found = [], []
     for t, (image, mask) in enumerate(clip):

@@ -1,57 +1,32 @@
-"""The velocity path (issue 13): 2-D motion, the fitted observer motion, the
-constraint ray in velocity space, animate motion, objects and tracks.
+"""The velocity path's measurement and fit (issue 13, items 1, 2 and 6): 2-D
+motion, the fitted observer motion, the off-ray distance, the forward-backward
+check, and frames that cannot be judged. The detectors on it are tested in
+``test_velocity_ray.py`` and ``test_velocity_animate.py``, objects and tracks
+in ``test_tracking.py``.
 
 Scenes are a real photograph moved by exact warps, with textured squares
-pasted as movers, so every answer is known.
+pasted as movers (``velocity_scenes.py``), so every answer is known.
 """
 
 from __future__ import annotations
-
-import threading
-from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 from skimage import data
 
-from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
 from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
-from motiondetect.constraint_ray.egomotion import EgoMotion
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.plane import (
     fit_homography,
     mixture_log_likelihood,
     plane_error,
 )
-from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, gap_to_segment
+from motiondetect.constraint_ray.velocity_filter import gap_to_segment
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker
-from motiondetect.io.source import SourceFrame
-from motiondetect.io.video import open_source, read_mask
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig
-from motiondetect.tools.evaluate import Counts, score_frame
 
-W, H = 320, 240
-PHOTO = cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR)
-PATCH = cv2.resize(cv2.cvtColor(data.coffee(), cv2.COLOR_RGB2BGR), (48, 48))
-
-
-def background(dx: float, dy: float = 0.0, zoom: float = 1.0) -> np.ndarray:
-    """The photograph seen by a camera moved by (dx, dy) px and zoomed about the centre."""
-    c = np.array([256.0, 256.0])
-    m = np.array([[zoom, 0, (1 - zoom) * c[0] - dx - 96], [0, zoom, (1 - zoom) * c[1] - dy - 136]])
-    return cv2.warpAffine(PHOTO, m, (W, H), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
-
-
-def paste(frame: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
-    """The patch at sub-pixel (x, y), and its 0/255 mask."""
-    m = np.float32([[1, 0, x], [0, 1, y]])
-    patch = cv2.warpAffine(PATCH, m, (W, H), flags=cv2.INTER_CUBIC)
-    inside = cv2.warpAffine(np.ones((48, 48), np.float32), m, (W, H)) > 0.5
-    out = frame.copy()
-    out[inside] = patch[inside]
-    return out, inside
+from .velocity_scenes import H, W, background, field_between
 
 
 @pytest.mark.parametrize("speed", [0.5, 3.0, 10.0, 25.0])
@@ -71,14 +46,8 @@ def test_dense_flow_never_upscales():
     assert flow.geometry_for(640, 480).work_size == (640, 480)
 
 
-def _field(a: np.ndarray, b: np.ndarray):
-    flow = DenseFlow(DenseFlowConfig(work_size=W))
-    flow.process(a)
-    return flow.process(b)
-
-
 def test_fit_explains_a_rigid_planar_scene():
-    field = _field(background(0.0, zoom=1.0), background(4.0, 1.0, zoom=1.02))
+    field = field_between(background(0.0, zoom=1.0), background(4.0, 1.0, zoom=1.02))
     fit = fit_camera(field, FitConfig())
     assert fit.reliable and fit.inlier_share > 0.8
     r = fit.residual_px[16:-16, 16:-16]
@@ -142,7 +111,7 @@ def test_planes_scored_together_score_as_one_by_one():
 
 
 def test_a_judged_field_keeps_the_maps_already_computed():
-    field = _field(background(0.0), background(3.0, 1.0))
+    field = field_between(background(0.0), background(3.0, 1.0))
     structure, source = field.structure, field.source_px
     judged = field.judged(fit_camera(field, FitConfig()))
     assert judged.camera is not None and judged.structure is structure
@@ -183,214 +152,6 @@ def test_distance_to_the_constraint_segment():
     np.testing.assert_allclose(np.hypot(*gap.T), [0.0, 0.0, 2.0, 3.0, 3.0], atol=1e-6)
 
 
-def _pan_with_mover(path, frames=24, pan=2.0):
-    """Frames of a panning camera with the patch at ``path(t)``; masks too."""
-    out = []
-    for t in range(frames):
-        image, mask = paste(background(pan * t), *path(t))
-        out.append((image, mask))
-    return out
-
-
-def _hits(md: MotionDetector, clip, warmup: int = 3) -> list[bool]:
-    hits = []
-    for t, (image, mask) in enumerate(clip):
-        result = md.process(image, t, t / 30)
-        if t >= warmup:
-            flagged = result.input_mask(W, H) > 0
-            hits.append(flagged[mask].mean() >= 0.5)
-    return hits
-
-
-def test_constraint_ray_finds_a_whole_mover_under_a_pan():
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t))
-    md = MotionDetector("constraint-ray")
-    hits = _hits(md, clip)
-    assert np.mean(hits) >= 0.9
-
-
-def test_the_remembered_background_trims_a_fast_movers_trail():
-    """8 px/frame under a pan: without the memory the mask carries the
-    ghost on the trailing side; with it (the default) precision rises, and
-    the mover is still found whole."""
-    clip = _pan_with_mover(lambda t: (40 + 8 * t, 100 + 0.5 * t))
-    scores = {}
-    for rate in (0.0, TrackConfig().background_rate):
-        md = MotionDetector("both", TrackConfig(background_rate=rate))
-        counts = Counts()
-        for t, (image, mask) in enumerate(clip):
-            result = md.process(image, t, t / 30)
-            if t >= 3:
-                counts.add(score_frame(result.input_mask(W, H), mask.astype(np.uint8) * 255))
-        scores[rate] = counts.metrics()
-    off, on = scores[0.0], scores[TrackConfig().background_rate]
-    assert on["recall"] > 0.95 and off["recall"] > 0.95  # measured 1.00 both
-    assert on["precision"] > off["precision"] + 0.05  # measured 0.76 against 0.67
-
-
-def test_rigid_pan_flags_nothing():
-    md = MotionDetector()
-    for t in range(20):
-        result = md.process(background(2.5 * t, 0.3 * t), t, t / 30)
-        assert result.regions == [], t
-
-
-def _dim_and_auto_exposed(image: np.ndarray, t: int, rng) -> np.ndarray:
-    """Frame ``t`` as a dim sensor with automatic exposure gives it: a gain
-    drifting by up to 20 % (up to 10 % a frame) and 8 grey levels of noise."""
-    gain = 1.0 + 0.2 * np.sin(2 * np.pi * t / 12)
-    noisy = image.astype(np.float32) * gain + rng.normal(0.0, 8.0, image.shape)
-    return np.clip(noisy, 0, 255).astype(np.uint8)
-
-
-def test_sensor_noise_and_exposure_drift_neither_hide_a_mover_nor_add_alarms():
-    """The tolerances come from each frame's measured noise, and DIS matches
-    mean-normalised patches, so neither changes the answer: the mover is
-    found on every judged frame (measured 21 of 21) and the rigid pan
-    gives no region (measured none in 20 frames)."""
-    rng = np.random.default_rng(0)
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t))
-    clip = [(_dim_and_auto_exposed(image, t, rng), mask) for t, (image, mask) in enumerate(clip)]
-    assert np.mean(_hits(MotionDetector(), clip)) >= 0.9
-    md = MotionDetector()
-    for t in range(20):
-        frame = _dim_and_auto_exposed(background(2.5 * t, 0.3 * t), t, rng)
-        assert md.process(frame, t, t / 30).regions == [], t
-
-
-def waving(period_half: int, speed: float, frames: int = 30):
-    """Velocity +speed for period_half frames, then -speed: a reversing limb."""
-
-    def x(t: int) -> float:
-        pos, v = 130.0, speed
-        for i in range(t):
-            pos += v if (i // period_half) % 2 == 0 else -v
-        return pos
-
-    return lambda t: (x(t), 90.0)
-
-
-@pytest.mark.parametrize("period_half,speed", [(4, 10.0), (5, 12.0), (6, 15.0), (4, 30.0)])
-def test_animate_alone_flags_reversing_movers(period_half, speed):
-    clip = _pan_with_mover(waving(period_half, speed), frames=30, pan=1.5)
-    md = MotionDetector("animate", persistence=1)
-    hits = []
-    for t, (image, mask) in enumerate(clip):
-        result = md.process(image, t, t / 30)
-        if t >= 3:
-            out = result.outputs["velocity-animate"]
-            hits.append(bool(out.mask[mask].any()))
-    assert np.mean(hits) >= 0.7
-
-
-def test_a_cut_clears_the_animate_memory():
-    """The animate label is carried along each frame's motion; across a
-    frame that cannot be judged it is not carried on. Here a mover reverses
-    on frame 5 and then moves smoothly: without a cut its label is still
-    carried three frames later; after a cut it is gone."""
-    clip = _pan_with_mover(waving(4, 10.0), frames=9, pan=1.5)
-    cut = cv2.resize(cv2.cvtColor(data.chelsea(), cv2.COLOR_RGB2BGR), (W, H))
-
-    def animate_on_mover(frames) -> list[bool]:
-        md = MotionDetector("animate", persistence=1)
-        flagged = []
-        for t, (image, mask) in enumerate(frames):
-            out = (md.process(image, t, t / 30).outputs or {}).get("velocity-animate")
-            flagged.append(out is not None and bool(out.mask[mask].any()))
-        return flagged
-
-    steady = animate_on_mover(clip)
-    assert steady[5] and steady[8]  # the reversal, and its label carried since
-    # The cut and the frame after it (a cut back) cannot be judged; frame 7 has
-    # no previous field to test; on frame 8 the mover continues smoothly.
-    cut_clip = [*clip[:6], (cut, np.zeros((H, W), bool)), *clip[6:]]
-    after = animate_on_mover(cut_clip)
-    assert after[5] and not after[-1]
-
-
-def test_animate_leaves_a_smooth_mover_alone():
-    clip = _pan_with_mover(lambda t: (60 + 4 * t, 100 + 1.0 * t), frames=24)
-    md = MotionDetector("animate", persistence=1)
-    flagged = []
-    for t, (image, _mask) in enumerate(clip):
-        result = md.process(image, t, t / 30)
-        if t >= 3:
-            flagged.append(bool(result.regions))
-    assert np.mean(flagged) <= 0.1
-
-
-def _obj(x0: float, v: float = 5.0) -> MovingObject:
-    mask = np.zeros((10, 10), bool)
-    return MovingObject(mask, (x0, 10.0, x0 + 20, 40.0), (v, 0.0))
-
-
-def test_tracker_keeps_ids_and_needs_persistence():
-    tracker = Tracker(TrackConfig(persistence=2))
-    assert tracker.update([_obj(0.0)]) == []  # seen once: not yet reported
-    second = tracker.update([_obj(5.0), _obj(200.0)])
-    assert [o.track for o in second] == [1]  # the new object at 200 waits a frame
-    third = tracker.update([_obj(10.0), _obj(205.0)])
-    assert sorted(o.track for o in third) == [1, 2]
-    tracker.coast()  # an unreliable frame: tracks survive it
-    fourth = tracker.update([_obj(20.0)])
-    assert [o.track for o in fourth] == [1]
-
-
-def test_a_cut_ends_every_track():
-    """Across a cut nothing is predicted: the mover, seen again after a cut
-    away and back, starts a new track and waits ``persistence`` frames, while
-    a frame that merely cannot be judged is coasted through (above)."""
-    clip = _pan_with_mover(lambda t: (60 + 3 * t, 100 + 1.0 * t), frames=12)
-    cut = cv2.resize(cv2.cvtColor(data.chelsea(), cv2.COLOR_RGB2BGR), (W, H))
-    md = MotionDetector("constraint-ray")
-    results = [md.process(image, t, t / 30) for t, (image, _) in enumerate(clip[:6])]
-    before = {r.track for r in results[-1].regions}
-    assert len(before) == 1  # the mover, confirmed
-    md.process(cut, 6, 0.2)
-    back = md.process(clip[6][0], 7, 0.23)
-    assert back.reason == "cut" and not back.regions  # the cut back
-    first = md.process(clip[7][0], 8, 0.27)
-    assert first.reliable and first.regions == []  # a new track, not yet confirmed
-    second = md.process(clip[8][0], 9, 0.3)
-    after = {r.track for r in second.regions}
-    assert len(after) == 1 and after.isdisjoint(before)
-
-
-def test_a_missed_track_is_predicted_as_far_as_it_moved_meanwhile():
-    """A mover missed for a few frames is looked for where its velocity has
-    carried it since it was last seen, not one frame's motion ahead."""
-    tracker = Tracker(TrackConfig(persistence=2, max_missed=5))
-    tracker.update([_obj(0.0, v=10.0)])
-    assert [o.track for o in tracker.update([_obj(10.0, v=10.0)])] == [1]
-    for _ in range(3):
-        assert tracker.update([]) == []  # missed: still moving at 10 px a frame
-    assert [o.track for o in tracker.update([_obj(50.0, v=10.0)])] == [1]
-
-
-def test_most_of_the_frame_off_the_fit_can_mark_a_frame_unreliable():
-    """With ``max_flagged_share`` set, a frame flagged nearly whole is not judged;
-    by default (off) the same frames are judged."""
-    from motiondetect.constraint_ray.camera_fit import FitConfig
-
-    other = cv2.resize(cv2.cvtColor(data.coffee(), cv2.COLOR_RGB2BGR), (W, H))
-    frames = [background(2.0 * t) for t in range(4)]
-    for t in range(5):  # a second picture sliding the other way across the whole view
-        frames.append(cv2.addWeighted(frames[3], 0.4, np.roll(other, 8 * t, axis=1), 0.6, 0))
-    reason = "most of the frame off the fitted motion"
-    # A picture covering the frame also inflates the frame's residual spread, which
-    # then tolerates it (VelocityRayConfig.spread_sigmas); the share test is about
-    # what is flagged, so the spread term is off on both sides here.
-    # The fit takes the blend's stronger picture as the plane; what is flagged
-    # off it covers 0.23-0.40 of the frame.
-    ray = VelocityRayConfig(spread_sigmas=0.0)
-    strict = MotionDetector("both", FitConfig(max_flagged_share=0.2), ray)
-    default = MotionDetector("both", ray)
-    strict_reasons = [strict.process(f, i, i / 30).reason for i, f in enumerate(frames)]
-    default_reasons = [default.process(f, i, i / 30).reason for i, f in enumerate(frames)]
-    assert strict_reasons[:4] == [""] * 4 and reason in strict_reasons[5:]
-    assert reason not in default_reasons
-
-
 def test_image_changed_finds_a_change_and_ignores_noise():
     from motiondetect.constraint_ray.camera_fit import CameraFit
 
@@ -403,31 +164,6 @@ def test_image_changed_finds_a_change_and_ignores_noise():
     outside = np.ones_like(changed)
     outside[35:75, 55:105] = False
     assert changed[outside].mean() < 0.002
-
-
-def test_flow_without_image_change_is_not_flagged():
-    """A residual in a blank region (flow's own error) has no photometric evidence."""
-    from motiondetect.constraint_ray.camera_fit import CameraFit
-    from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig, VelocityRayDetector
-    from motiondetect.measurement.dense_flow import VelocityField, pixel_grid
-    from motiondetect.measurement.normal_flow import GridGeometry
-
-    h, w = 96, 128
-    rng = np.random.default_rng(0)
-    grey = rng.integers(0, 255, (h, w)).astype(np.uint8)
-    residual = rng.normal(0, 0.1, (h, w, 2)).astype(np.float32)
-    residual[20:40, 20:40] = (3.0, 0.0)  # flow error: the image did not change there
-    residual[50:70, 80:100] = (3.0, 0.0)  # a mover: it did
-    difference = np.abs(rng.normal(0, 2.0, (h, w))).astype(np.uint8)
-    difference[50:70, 80:100] = 40
-    fit = CameraFit(np.eye(3), residual, 0.1, 0.9, None, "", 0.5, difference)
-    velocity = residual  # the plane is the identity: the residual is the velocity
-    geometry = GridGeometry((w, h), (w, h))
-    field = VelocityField(velocity, grey, grey, geometry, pixel_grid(w, h), fit)
-    for sigmas, blank_flagged in ((3.0, False), (0.0, True)):
-        out = VelocityRayDetector(VelocityRayConfig(evidence_sigmas=sigmas)).process(field)
-        assert out.mask[55:65, 85:95].all()
-        assert out.mask[25:35, 25:35].any() == blank_flagged
 
 
 def test_heavily_blurred_frames_are_marked_unreliable():
@@ -443,239 +179,6 @@ def test_heavily_blurred_frames_are_marked_unreliable():
     assert [i for i, r in enumerate(reasons) if r == "heavy blur"] == sorted(blurred)
     off = MotionDetector("both", FitConfig(blur_ratio=0.0))
     assert all(off.process(f, i, i / 30).reason != "heavy blur" for i, f in enumerate(frames))
-
-
-def _terrain(t: int, speed: float = 3.0) -> np.ndarray:
-    """A rigid scene of smoothly varying depth seen by a camera translating sideways:
-    inverse depth 0.7-1.3, so image speeds run 2.1-3.9 px/frame, a parallax no
-    plane explains."""
-    yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)
-    inverse_depth = 1 + 0.3 * np.sin(2 * np.pi * xx / W) * np.sin(2 * np.pi * yy / H)
-    map_x = xx + 96 + speed * t * inverse_depth
-    return cv2.remap(PHOTO, map_x, yy + 136, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
-
-
-def _terrain_run(spread_sigmas: float, mover: bool) -> tuple[float, float]:
-    """(share of frames with the mover half flagged, false-alarm regions per frame)."""
-    # The aperture gate and the discount next to the frame edge, added later,
-    # also remove some of this parallax: off, to measure the spread term alone.
-    ray = VelocityRayConfig(spread_sigmas=spread_sigmas, edge_error_ratio=1.0)
-    fit = FitConfig(aperture_noise=0.0)
-    md = MotionDetector("both", ray, fit)
-    hits, false_alarms = [], []
-    for t in range(12):
-        image, mask = _terrain(t), np.zeros((H, W), bool)
-        if mover:
-            image, mask = paste(image, 130.0, 40 + 8.0 * t)
-        flagged = md.process(image, t, t / 30).input_mask(W, H) > 0
-        if t < 3:
-            continue
-        hits.append(flagged[mask].mean() >= 0.5 if mover else True)
-        count, labels = cv2.connectedComponents(flagged.astype(np.uint8))
-        false_alarms.append(count - 1 - len(set(np.unique(labels[mask & flagged])) - {0}))
-    return float(np.mean(hits)), float(np.mean(false_alarms))
-
-
-def test_the_frames_measured_spread_tolerates_rigid_parallax():
-    """The tolerance grows with the whole frame's residual spread, so the
-    parallax of a rigid scene of many depths passes while a mover crossing it
-    is still found; without the spread term the parallax is flagged."""
-    found, with_mover = _terrain_run(5.0, mover=True)
-    _, rigid_only = _terrain_run(5.0, mover=False)
-    _, rigid_without_spread = _terrain_run(0.0, mover=False)
-    assert found >= 0.9  # measured 1.0
-    assert with_mover <= 0.7 and rigid_only <= 0.8  # measured 0.56 and 0.56
-    assert rigid_without_spread >= 1.5  # measured 2.33
-
-
-def _slowing_mover_found(prior: bool) -> float:
-    """Share of frames 10-23 with the mover half flagged: under a 2 px/frame pan it
-    moves 3 px/frame against the background for 8 frames, then 0.75 of the
-    tolerance's floor, under it but above half of it (the growth threshold)."""
-    # Without the summed residual, which the slowed mover borders on.
-    ray = VelocityRayConfig(carry=0.0)
-    md = MotionDetector("constraint-ray", TrackConfig(prior=prior), ray)
-    x, hits = 60.0, []
-    for t in range(24):
-        x += 3.0 if t < 8 else 0.75 * ray.floor_px
-        image, mask = paste(background(2.0 * t), x - 2.0 * t, 100.0)
-        flagged = md.process(image, t, t / 30).input_mask(W, H) > 0
-        if t >= 10:
-            hits.append(flagged[mask].mean() >= 0.5)
-    return float(np.mean(hits))
-
-
-def test_a_tracked_mover_that_slows_stays_found():
-    """Where a confirmed track is predicted, a seed needs only the growth
-    threshold, so a mover that slows under the floor is still found there;
-    without the prior it is lost."""
-    assert _slowing_mover_found(prior=True) >= 0.8  # measured 1.0
-    # measured 0.0; at 0.9 of the floor 0.29, since the tight plane, likelier
-    # here, leaves the mover its whole residual, which DIS's error lifts over
-    # the floor
-    assert _slowing_mover_found(prior=False) <= 0.2
-
-
-def _animate_on_sample(name: str, *configs, detector: str = "animate") -> tuple[float, float]:
-    """(false-alarm regions per frame, object recall) of ``detector`` (the
-    animate detector alone unless named) on a sample video."""
-    folder = Path(__file__).resolve().parents[1] / "sample_videos" / name
-    md, counts = MotionDetector(detector, *configs), Counts()
-    with open_source(folder / "video.mp4") as source:
-        for frame in source:
-            result = md.process(frame.image, frame.index, frame.time_s)
-            if frame.index >= 2:
-                truth = read_mask(folder / "truth" / f"{frame.index:06d}.png")
-                counts.add(score_frame(result.input_mask(*truth.shape[::-1]), truth))
-    m = counts.metrics()
-    return m["false_alarm_regions_per_frame"], m["object_recall"]
-
-
-def test_animate_skips_the_frame_edge_of_both_flow_fields():
-    """Along the frame edge both the current flow and the previous one (read
-    where each point came from) are extrapolated; the animate test skips twice
-    the edge band there, which removes false alarms and no mover."""
-    no_evidence = VelocityAnimateConfig(evidence_sigmas=0.0)  # as when this was measured
-    unchecked = DenseFlowConfig(check_preset="off")
-    band, no_band = (FitConfig(edge_px=px, aperture_noise=0.0) for px in (4.0, 0.0))
-    with_band = _animate_on_sample("pan_blindspot", band, no_evidence, unchecked)
-    without = _animate_on_sample("pan_blindspot", no_band, no_evidence, unchecked)
-    assert with_band[0] <= 0.8 and without[0] >= with_band[0] + 0.2  # measured 0.74 and 1.09
-    assert with_band[1] == pytest.approx(without[1])
-
-
-@pytest.mark.parametrize("name", ["pan_blindspot", "handheld_emerging"])
-def test_animate_violations_need_an_image_change(name):
-    """A flow that breaks its motion where the image, once the camera's motion
-    is undone, did not change is the measurement's error: gating violations
-    on an image change removes false alarms and keeps the movers."""
-    whole = FitConfig(aperture_noise=0.0)  # as when this was measured
-    unchecked = DenseFlowConfig(check_preset="off")
-    no_memory = TrackConfig(background_rate=0.0)  # its trimming takes out false alarms too
-    gated = _animate_on_sample(name, whole, unchecked, no_memory)
-    ungated = _animate_on_sample(
-        name, whole, unchecked, no_memory, VelocityAnimateConfig(evidence_sigmas=0.0)
-    )
-    # measured 0.05 against 0.76 (pan_blindspot), 0.02 against 0.40
-    assert gated[0] <= 0.2 and ungated[0] >= gated[0] + 0.3
-    assert gated[1] == pytest.approx(ungated[1], abs=0.03)
-
-
-@pytest.mark.parametrize("measure", ["velocity", "normal"])
-def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch, measure):
-    from .scenes import scene
-
-    frames = scene("pan", ("smooth", "animate"), frames=16)
-    serial = MotionDetector("both", measure=measure)
-    expected = [serial.process(fr.image, fr.index, fr.index / 30) for fr in frames]
-    threads = set()
-    ahead = MotionDetector("both", measure=measure)
-    measure = ahead.measure_frame
-
-    def measure_and_note(image):
-        threads.add(threading.current_thread().name)
-        return measure(image)
-
-    monkeypatch.setattr(ahead, "measure_frame", measure_and_note)
-    before = cv2.getNumThreads()
-    cv2.setNumThreads(2)
-    try:
-        source = (SourceFrame(fr.index, fr.index / 30, fr.image) for fr in frames)
-        streamed = list(ahead.stream(source))
-    finally:
-        cv2.setNumThreads(before)
-    assert threads and all(name.startswith("measure") for name in threads)
-    assert [f.index for f, _ in streamed] == [fr.index for fr in frames]
-    assert sum(len(r.regions) for r in expected) > 0
-    for want, (_, got) in zip(expected, streamed, strict=True):
-        assert [r.bbox for r in got.regions] == [r.bbox for r in want.regions]
-        assert [r.track for r in got.regions] == [r.track for r in want.regions]
-        assert got.reason == want.reason
-        assert np.array_equal(got.flagged, want.flagged)
-        if want.mask is not None:
-            assert np.array_equal(got.mask, want.mask)
-
-
-def _slow_mover_frames(
-    frames, carry: float, floor_px: float = VelocityRayConfig.floor_px
-) -> tuple[int, int]:
-    """(frames with a region on the mover, regions touching no mover pixel)."""
-    from .scenes import found_and_stray
-
-    ray = VelocityRayConfig(carry=carry, floor_px=floor_px)
-    return found_and_stray(MotionDetector("constraint-ray", ray), frames)
-
-
-def test_a_mover_too_slow_for_one_frame_is_found_by_the_summed_residual():
-    from .scenes import scene
-
-    # About 0.75 px/frame against a one-frame tolerance of 1 px (as noisy
-    # footage sets it; the floor stands for it here), above the summed test's
-    # 0.6 px/frame. Measured: 0 frames without the sum, 26 with.
-    slow = scene("static", ("smooth",), frames=30, speed=0.25)
-    on, off = _slow_mover_frames(slow, carry=0.0, floor_px=1.0)
-    assert on <= 3 and off == 0
-    on, off = _slow_mover_frames(slow, carry=0.75, floor_px=1.0)
-    assert on >= 14 and off == 0
-    still = scene("static", (), frames=30)
-    assert _slow_mover_frames(still, carry=0.75) == (0, 0)
-
-
-def test_seeds_are_tested_on_the_motion_the_image_determines():
-    """uniform_rigid's brick wall has long mortar lines: along them the flow is
-    filled in, and wrong by pixels. Testing seeds only on the determined
-    residual removes most of those false alarms and keeps uniform_mixed's
-    movers. Measured without the forward-backward check, which came later and
-    takes out most of the rest (0.09 and 0.16 with it)."""
-    whole, unchecked = FitConfig(aperture_noise=0.0), DenseFlowConfig(check_preset="off")
-    on = _animate_on_sample("uniform_rigid", unchecked, detector="both")[0]
-    off = _animate_on_sample("uniform_rigid", whole, unchecked, detector="both")[0]
-    assert on <= 0.7 and off >= 1.2  # measured 0.40 and 1.67
-    kept = _animate_on_sample("uniform_mixed", unchecked, detector="both")
-    before = _animate_on_sample("uniform_mixed", whole, unchecked, detector="both")
-    assert kept[1] >= before[1] - 0.03 and kept[0] < before[0]  # measured 0.26 against 1.19
-
-
-@pytest.mark.parametrize("threads", [1, 2])
-def test_frame_skip_judges_one_frame_in_three_and_holds_its_result(threads):
-    from .scenes import scene
-
-    frames = scene("pan", ("smooth",), frames=16)
-    alone = MotionDetector("both")  # the judged frames only, one at a time
-    expected = {
-        fr.index: alone.process(fr.image, fr.index, fr.index / 30)
-        for fr in frames
-        if fr.index % 3 == 0
-    }
-    before = cv2.getNumThreads()
-    cv2.setNumThreads(threads)
-    try:
-        source = (SourceFrame(fr.index, fr.index / 30, fr.image) for fr in frames)
-        streamed = list(MotionDetector("both").stream(source, frame_skip=2))
-    finally:
-        cv2.setNumThreads(before)
-    assert [f.index for f, _ in streamed] == [fr.index for fr in frames]
-    for frame, result in streamed:
-        judged = frame.index - frame.index % 3
-        want = expected[judged]
-        assert (result.index, result.time_s) == (frame.index, frame.index / 30)
-        assert result.held_from == (None if judged == frame.index else judged)
-        assert [r.bbox for r in result.regions] == [r.bbox for r in want.regions]
-        assert np.array_equal(result.mask, want.mask)
-    boxed = [i for i, r in expected.items() if r.regions]
-    assert len(boxed) >= 3  # frames 0 and 3 are warm-up and the first sighting
-    for i in boxed:  # velocities over three frames still find the mover
-        x, y, w, h = expected[i].regions[0].bbox
-        assert frames[i].mask[y : y + h, x : x + w].any()
-
-
-def test_frame_skip_below_zero_or_with_known_egomotion_is_refused():
-    with pytest.raises(ValueError, match="frame_skip"):
-        next(MotionDetector("both").stream([], frame_skip=-1))
-    folder = Path(__file__).resolve().parents[1] / "sample_videos" / "uniform_rigid"
-    known = MotionDetector("constraint-ray", egomotion=EgoMotion.load(folder / "scene.json"))
-    with pytest.raises(ValueError, match="known ego-motion"):
-        next(known.stream([], frame_skip=1))
 
 
 @pytest.mark.parametrize(
@@ -710,36 +213,6 @@ def test_forward_backward_check_reads_the_forward_flow_where_each_pixel_was():
     assert got[:, :25].all() and got[:, 30:55].all()  # both halves confirmed
     assert not got[:, 25:30].any()  # still pixels whose source moved away
     assert not got[:, 55:].any()  # moved pixels whose source did not move
-
-
-def test_an_error_while_judging_stops_the_reading_thread_before_it_propagates(monkeypatch):
-    """The caller closes its source when an error comes out of ``stream``; the
-    second thread must not be reading it then (PyAV crashed on a closed
-    container)."""
-    image = (np.indices((120, 160)).sum(axis=0) % 7 * 30).astype(np.uint8)
-    md = MotionDetector("both")
-    judge = md.judge
-
-    def fail_on_the_third(flow, index, time_s):
-        if index == 2:
-            raise RuntimeError("boom")
-        return judge(flow, index, time_s)
-
-    monkeypatch.setattr(md, "judge", fail_on_the_third)
-    before = cv2.getNumThreads()
-    cv2.setNumThreads(2)
-    try:
-        frames = (SourceFrame(i, i / 30, np.roll(image, i, axis=1)) for i in range(8))
-        with pytest.raises(RuntimeError, match="boom") as caught:
-            for _ in md.stream(frames, frame_skip=0):
-                pass
-        # while the error (and its traceback, holding the stream's frame) lives,
-        # as when process_input's source closes during its propagation
-        readers = [t for t in threading.enumerate() if t.name.startswith("measure")]
-        assert caught.traceback
-    finally:
-        cv2.setNumThreads(before)
-    assert readers == []
 
 
 def test_forward_backward_check_on_a_list_of_points_equals_the_whole_frame():
