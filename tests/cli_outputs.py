@@ -10,6 +10,7 @@ from pathlib import Path
 
 import cv2
 import jsonschema
+import numpy as np
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
@@ -28,6 +29,13 @@ def write_video(path: Path, frames, fourcc: str = "mp4v", fps: float = 30.0) -> 
         writer.write(f)
     writer.release()
     return path
+
+
+def noise_video(path: Path, frames: int = 6, seed: int = 0) -> Path:
+    """A small mp4 of smoothed noise panning 2 px a frame (``seed`` sets the noise)."""
+    rng = np.random.default_rng(seed)
+    base = cv2.GaussianBlur(rng.integers(0, 255, (120, 160, 3), np.uint8), (5, 5), 0)
+    return write_video(path, [np.roll(base, 2 * i, axis=1) for i in range(frames)])
 
 
 def decode_count(path: Path) -> int:

@@ -16,35 +16,21 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from motiondetect_cli.main import main
 
 from motiondetect.app.inputs import InputJob, discover_inputs, unique_names
 from motiondetect.app.process import process_input
 from motiondetect.app.runner import output_lock, run
 from motiondetect.app.settings import make_settings
 
+from .cli_outputs import invoke, noise_video
+
 EXE = [sys.executable, "-m", "motiondetect_cli.main"]
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "uniform_mixed" / "video.mp4"
 
 
-def video(path: Path, frames: int = 6, seed: int = 0) -> Path:
-    rng = np.random.default_rng(seed)
-    base = cv2.GaussianBlur(rng.integers(0, 255, (120, 160, 3), np.uint8), (5, 5), 0)
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (160, 120))
-    for i in range(frames):
-        writer.write(np.roll(base, 2 * i, axis=1))
-    writer.release()
-    return path
-
-
-def invoke(*args):
-    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
-
-
 @pytest.mark.parametrize("half", ["measure_frame", "judge"])  # the measuring thread, or this one
 def test_any_exception_is_one_inputs_failure_and_the_batch_goes_on(tmp_path, monkeypatch, half):
-    good, bad = video(tmp_path / "good.mp4"), video(tmp_path / "bad.mp4", seed=1)
+    good, bad = noise_video(tmp_path / "good.mp4"), noise_video(tmp_path / "bad.mp4", seed=1)
     from motiondetect.detection import detector
 
     real = getattr(detector.MotionDetector, half)
@@ -67,7 +53,7 @@ def test_any_exception_is_one_inputs_failure_and_the_batch_goes_on(tmp_path, mon
 
 def test_names_are_unique_by_construction(tmp_path):
     for name in ("a-1.mp4", "a.mp4", "a.avi"):
-        video(tmp_path / name)
+        noise_video(tmp_path / name)
     jobs = discover_inputs([tmp_path], recursive=False)
     assert [j.name for j in jobs] == ["a-1", "a.avi", "a.mp4"]
     again = unique_names([InputJob(Path("x/a.mp4"), "a"), InputJob(Path("y/a.mp4"), "a")])
@@ -82,8 +68,8 @@ def test_names_are_unique_by_construction(tmp_path):
 def test_a_different_input_or_settings_is_never_skipped_silently(tmp_path):
     (tmp_path / "one").mkdir()
     (tmp_path / "two").mkdir()
-    one = video(tmp_path / "one" / "v.mp4", seed=1)
-    two = video(tmp_path / "two" / "v.mp4", seed=2)
+    one = noise_video(tmp_path / "one" / "v.mp4", seed=1)
+    two = noise_video(tmp_path / "two" / "v.mp4", seed=2)
     out = tmp_path / "out"
     assert invoke("detect", one, "-o", out, "-q", "--no-video").exit_code == 0
     other_input = invoke("detect", two, "-o", out, "-q", "--no-video")
@@ -103,7 +89,7 @@ def test_a_different_input_or_settings_is_never_skipped_silently(tmp_path):
 def test_discovery_visits_each_path_once_and_never_reads_its_own_outputs(tmp_path):
     batch = tmp_path / "batch"
     (batch / "sub").mkdir(parents=True)
-    video(batch / "sub" / "v.mp4")
+    noise_video(batch / "sub" / "v.mp4")
     (batch / "sub" / "loop").symlink_to(batch, target_is_directory=True)
     (batch / "again.mp4").symlink_to(batch / "sub" / "v.mp4")
     jobs = discover_inputs([batch], recursive=True)
@@ -125,7 +111,7 @@ def test_discovery_visits_each_path_once_and_never_reads_its_own_outputs(tmp_pat
 def test_a_second_run_into_the_same_folder_refuses(tmp_path):
     settings = make_settings({"output": tmp_path / "o", "video": False})
     with output_lock(settings.output):
-        result = invoke("detect", video(tmp_path / "v.mp4"), "-o", tmp_path / "o", "-q")
+        result = invoke("detect", noise_video(tmp_path / "v.mp4"), "-o", tmp_path / "o", "-q")
         assert result.exit_code == 1
         assert "is in use by another motiondetect run" in result.output
     assert run([tmp_path / "v.mp4"], settings).exit_code == 0  # free again
@@ -167,7 +153,7 @@ def test_a_signal_stops_a_jobs_2_batch_and_its_workers(tmp_path, sig, code):
     batch = tmp_path / "batch"
     batch.mkdir()
     for i in range(6):
-        video(batch / f"v{i}.mp4", frames=400, seed=i)
+        noise_video(batch / f"v{i}.mp4", frames=400, seed=i)
     command = [*EXE, "detect", str(batch), "-o", str(tmp_path / "o"), "-q", "--jobs", "2"]
     with subprocess.Popen(
         command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True

@@ -11,7 +11,7 @@ pytest.importorskip("dask.distributed")
 from motiondetect.app.runner import run  # noqa: E402
 from motiondetect.app.settings import make_settings  # noqa: E402
 
-from .test_batch import video  # noqa: E402
+from .cli_outputs import noise_video  # noqa: E402
 
 OUTPUTS = ("frames.jsonl", "detections.csv", "events.csv")
 
@@ -20,7 +20,7 @@ def batch(tmp_path: Path) -> Path:
     folder = tmp_path / "batch"
     folder.mkdir()
     for i in range(4):
-        video(folder / f"v{i}.mp4", frames=12, seed=i)
+        noise_video(folder / f"v{i}.mp4", frames=12, seed=i)
     return folder
 
 
