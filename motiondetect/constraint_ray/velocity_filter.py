@@ -102,7 +102,17 @@ class VelocityRayConfig:
     slow_px : float
         The slowest steady residual motion the summed test flags, work
         px/frame: its tolerance is ``slow_px / (1 - carry)`` (or the summed
-        field's own spread, as for one frame).
+        field's own spread, as for one frame). It stands for DIS's error
+        under a moving image, which repeats from frame to frame (a steady
+        sub-pixel motion is measured with the same bias each time) and so
+        adds up in the sum as a mover does.
+    static_slow_px : float
+        ``slow_px`` on frames whose fitted motion is static (class 0: no
+        parallax, median speed below ``camera_fit.STATIC_SPEED_PX``). Where
+        the image does not move, that repeating error has nothing to come
+        from; what is left is the sensor's noise, independent from frame to
+        frame, which the summed field's own spread measures. 0: the spread
+        alone (docs/detectors.md, "A still camera's slow movers").
     edge_error_ratio : float
         Within one DIS patch of the frame edge (``VelocityField.patch_px``)
         the off-ray distance, one frame's and the summed, counts divided by
@@ -121,6 +131,7 @@ class VelocityRayConfig:
     evidence_box: int = 5
     carry: float = 0.75
     slow_px: float = 0.6
+    static_slow_px: float = 0.0
     edge_error_ratio: float = 2.0
 
     def __post_init__(self) -> None:
@@ -133,7 +144,7 @@ class VelocityRayConfig:
                 "grow_ratio",
                 "edge_error_ratio",
             ),
-            non_negative=("close_px", "spread_sigmas", "carry", "slow_px"),
+            non_negative=("close_px", "spread_sigmas", "carry", "slow_px", "static_slow_px"),
         )
         if self.carry >= 1:
             raise ValueError(f"carry must be below 1, but got {self.carry}")
@@ -231,7 +242,8 @@ class VelocityRayDetector:
         step = _SPREAD_STEP
         spread = residual_spread(distance[step:-step:step, step:-step:step])
         memory = 1.0 / (1.0 - cfg.carry)  # frames a steady sum reaches back
-        tolerance = max(cfg.slow_px * memory, cfg.spread_sigmas * spread)
+        slow = cfg.static_slow_px if fit.class_id == 0 else cfg.slow_px
+        tolerance = max(slow * memory, cfg.spread_sigmas * spread)
         # What entered the frame during that memory carries flow extrapolated
         # at the edge, so the band reaches as far as the view moved meanwhile.
         band = fit.edge_band_px + fit.median_speed_px * (memory - 1.0)
