@@ -101,7 +101,7 @@ def hough_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray,
 
 #: px/frame, off whole pixels (a whole-pixel shift copies pixels exactly);
 #: 40.5 and 50.5 lie past the band, to show where it ends.
-SPEEDS = (0.3, 0.7, 1.5, 3.5, 7.5, 15.5, 29.5, 40.5, 50.5)
+SPEEDS = (0.1, 0.3, 0.7, 1.5, 3.5, 7.5, 15.5, 29.5, 40.5, 50.5)
 MOTIONS = [
     *(("translation", s, f"translation {s:g} px/frame") for s in SPEEDS),
     *(("rotation", a, f"rotation {a:g} deg/frame") for a in (0.5, 1, 2, 4)),

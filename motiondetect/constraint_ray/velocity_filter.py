@@ -106,13 +106,16 @@ class VelocityRayConfig:
         under a moving image, which repeats from frame to frame (a steady
         sub-pixel motion is measured with the same bias each time) and so
         adds up in the sum as a mover does.
-    static_slow_px : float
-        ``slow_px`` on frames whose fitted motion is static (class 0: no
-        parallax, median speed below ``camera_fit.STATIC_SPEED_PX``). Where
-        the image does not move, that repeating error has nothing to come
-        from; what is left is the sensor's noise, independent from frame to
-        frame, which the summed field's own spread measures. 0: the spread
-        alone (docs/detectors.md, "A still camera's slow movers").
+    slow_full_speed_px : float
+        The image's speed (the fit's median, work px/frame) from which that
+        repeating error has its full size. It grows with the motion from none
+        on a still image, where there is nothing to measure a bias on and
+        only the sensor's noise is left (independent from frame to frame,
+        so the summed field's own spread measures it), to its full size by
+        0.3 px/frame (DIS's median error on known translations: 0 still,
+        0.03 px at 0.1 px/frame, 0.04-0.06 from 0.3 on). Below this speed
+        ``slow_px`` shrinks in proportion; 0: ``slow_px`` at every speed
+        (docs/detectors.md, "A still camera's slow movers").
     edge_error_ratio : float
         Within one DIS patch of the frame edge (``VelocityField.patch_px``)
         the off-ray distance, one frame's and the summed, counts divided by
@@ -131,7 +134,7 @@ class VelocityRayConfig:
     evidence_box: int = 5
     carry: float = 0.75
     slow_px: float = 0.6
-    static_slow_px: float = 0.0
+    slow_full_speed_px: float = 0.3
     edge_error_ratio: float = 2.0
 
     def __post_init__(self) -> None:
@@ -144,7 +147,7 @@ class VelocityRayConfig:
                 "grow_ratio",
                 "edge_error_ratio",
             ),
-            non_negative=("close_px", "spread_sigmas", "carry", "slow_px", "static_slow_px"),
+            non_negative=("close_px", "spread_sigmas", "carry", "slow_px", "slow_full_speed_px"),
         )
         if self.carry >= 1:
             raise ValueError(f"carry must be below 1, but got {self.carry}")
@@ -242,13 +245,19 @@ class VelocityRayDetector:
         step = _SPREAD_STEP
         spread = residual_spread(distance[step:-step:step, step:-step:step])
         memory = 1.0 / (1.0 - cfg.carry)  # frames a steady sum reaches back
-        slow = cfg.static_slow_px if fit.class_id == 0 else cfg.slow_px
-        tolerance = max(slow * memory, cfg.spread_sigmas * spread)
+        tolerance = max(self._slow_floor(fit) * memory, cfg.spread_sigmas * spread)
         # What entered the frame during that memory carries flow extrapolated
         # at the edge, so the band reaches as far as the view moved meanwhile.
         band = fit.edge_band_px + fit.median_speed_px * (memory - 1.0)
         distance = discounted_near_edge(distance, field.patch_px, cfg.edge_error_ratio)
         return without_frame_edge(distance, band), tolerance
+
+    def _slow_floor(self, fit: CameraFit) -> float:
+        """``slow_px``, in proportion to the image's speed below ``slow_full_speed_px``."""
+        full = self.config.slow_full_speed_px
+        if full <= 0:
+            return self.config.slow_px
+        return self.config.slow_px * min(1.0, fit.median_speed_px / full)
 
     def _slow_movers(
         self, field: VelocityField, fit: CameraFit, found: np.ndarray, changed: np.ndarray | None
