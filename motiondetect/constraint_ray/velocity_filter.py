@@ -106,16 +106,20 @@ class VelocityRayConfig:
         under a moving image, which repeats from frame to frame (a steady
         sub-pixel motion is measured with the same bias each time) and so
         adds up in the sum as a mover does.
-    slow_full_speed_px : float
-        The image's speed (the fit's median, work px/frame) from which that
-        repeating error has its full size. It grows with the motion from none
-        on a still image, where there is nothing to measure a bias on and
-        only the sensor's noise is left (independent from frame to frame,
-        so the summed field's own spread measures it), to its full size by
-        0.3 px/frame (DIS's median error on known translations: 0 still,
-        0.03 px at 0.1 px/frame, 0.04-0.06 from 0.3 on). Below this speed
-        ``slow_px`` shrinks in proportion; 0: ``slow_px`` at every speed
+    slow_still_px : float
+        ``slow_px`` on a still image, work px/frame. What DIS gets wrong
+        there repeats too, but less: a codec's ringing along strong edges
+        under a camera that trembles by a fraction of a pixel. Set as the
+        smallest floor at which still renders with rotational jitter of
+        0.01-0.04 deg/frame flag at most one region in 50 frames
         (docs/detectors.md, "A still camera's slow movers").
+    slow_full_speed_px : float
+        The image's speed (the fit's median, work px/frame) from which the
+        repeating error under motion has its full size: DIS's median error on
+        known translations is none still, 0.023 px at 0.1 px/frame and
+        0.04-0.06 px from 0.3 px/frame on. Below it the floor runs in
+        proportion from ``slow_still_px`` to ``slow_px``; 0: ``slow_px`` at
+        every speed.
     edge_error_ratio : float
         Within one DIS patch of the frame edge (``VelocityField.patch_px``)
         the off-ray distance, one frame's and the summed, counts divided by
@@ -134,6 +138,7 @@ class VelocityRayConfig:
     evidence_box: int = 5
     carry: float = 0.75
     slow_px: float = 0.6
+    slow_still_px: float = 0.2
     slow_full_speed_px: float = 0.3
     edge_error_ratio: float = 2.0
 
@@ -147,7 +152,14 @@ class VelocityRayConfig:
                 "grow_ratio",
                 "edge_error_ratio",
             ),
-            non_negative=("close_px", "spread_sigmas", "carry", "slow_px", "slow_full_speed_px"),
+            non_negative=(
+                "close_px",
+                "spread_sigmas",
+                "carry",
+                "slow_px",
+                "slow_still_px",
+                "slow_full_speed_px",
+            ),  # fmt: skip
         )
         if self.carry >= 1:
             raise ValueError(f"carry must be below 1, but got {self.carry}")
@@ -253,11 +265,13 @@ class VelocityRayDetector:
         return without_frame_edge(distance, band), tolerance
 
     def _slow_floor(self, fit: CameraFit) -> float:
-        """``slow_px``, in proportion to the image's speed below ``slow_full_speed_px``."""
-        full = self.config.slow_full_speed_px
-        if full <= 0:
-            return self.config.slow_px
-        return self.config.slow_px * min(1.0, fit.median_speed_px / full)
+        """The summed test's floor for this frame's image speed, px/frame: from
+        ``slow_still_px`` still to ``slow_px`` at ``slow_full_speed_px``."""
+        cfg = self.config
+        if cfg.slow_full_speed_px <= 0:
+            return cfg.slow_px
+        share = min(1.0, fit.median_speed_px / cfg.slow_full_speed_px)
+        return cfg.slow_still_px + (cfg.slow_px - cfg.slow_still_px) * share
 
     def _slow_movers(
         self, field: VelocityField, fit: CameraFit, found: np.ndarray, changed: np.ndarray | None
