@@ -30,6 +30,9 @@ this test (the blind spot, section 3.3).
 Movers slower than one frame's tolerance are found on the residual summed
 over frames along the motion (``carry``, ``slow_px``; not in the paper,
 docs/detectors.md): a steady motion adds up, independent noise much less.
+The floor of that test stands for DIS's error repeating under a moving
+image, so it shrinks with the image's speed (``slow_still_px``,
+``slow_full_speed_px``): a still camera's slow movers are found.
 """
 
 from __future__ import annotations
@@ -159,7 +162,7 @@ class VelocityRayConfig:
                 "slow_px",
                 "slow_still_px",
                 "slow_full_speed_px",
-            ),  # fmt: skip
+            ),
         )
         if self.carry >= 1:
             raise ValueError(f"carry must be below 1, but got {self.carry}")
