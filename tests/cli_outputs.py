@@ -38,10 +38,6 @@ def noise_video(path: Path, frames: int = 6, seed: int = 0) -> Path:
     return write_video(path, [np.roll(base, 2 * i, axis=1) for i in range(frames)])
 
 
-def decode_count(path: Path) -> int:
-    return count_decodable_frames(path)
-
-
 def invoke(*args: str) -> object:
     return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
 
@@ -66,7 +62,7 @@ def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = T
     check_tracks(out, rows[1:], summary)
     assert (out / "timeline.png").exists() == timeline
     if video:
-        assert decode_count(out / "annotated.mp4") == frames
+        assert count_decodable_frames(out / "annotated.mp4") == frames
     return summary
 
 

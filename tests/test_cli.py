@@ -13,7 +13,7 @@ import pytest
 from motiondetect.detection.base import DETECTOR_SETS
 from motiondetect.io.video import count_decodable_frames
 
-from .cli_outputs import check_outputs, decode_count, invoke
+from .cli_outputs import check_outputs, invoke
 from .scenes import scene
 
 
@@ -204,7 +204,7 @@ def test_extract_clips_are_frame_accurate(tmp_path, clip, clip_frames):
     assert summary["events"]
     for ev in summary["events"]:
         path = tmp_path / "pan" / "events" / f"event_{ev['event']:04d}.mp4"
-        assert decode_count(path) == ev["end_frame"] - ev["start_frame"] + 1
+        assert count_decodable_frames(path) == ev["end_frame"] - ev["start_frame"] + 1
         cap = cv2.VideoCapture(str(path))
         ok, first = cap.read()
         cap.release()
@@ -232,7 +232,7 @@ def test_extract_clips_are_frame_accurate(tmp_path, clip, clip_frames):
     clips = sorted((tmp_path / "a" / "pan" / "events").glob("event_*.mp4"))
     assert events and len(clips) == len(events)
     for ev, path in zip(events, clips):  # each clip holds exactly its event's frames
-        assert decode_count(path) == ev["end_frame"] - ev["start_frame"] + 1
+        assert count_decodable_frames(path) == ev["end_frame"] - ev["start_frame"] + 1
     plain = sorted((tmp_path / "pan" / "events").glob("event_*.mp4"))
     first_plain, first_annotated = cv2.VideoCapture(str(plain[0])), cv2.VideoCapture(str(clips[0]))
     a, b = first_plain.read()[1], first_annotated.read()[1]

@@ -15,8 +15,9 @@ import cv2
 from skimage import data
 
 from motiondetect.io.report import TRACK_COLUMNS
+from motiondetect.io.video import count_decodable_frames
 
-from .cli_outputs import check_outputs, decode_count, invoke, write_video
+from .cli_outputs import check_outputs, invoke, write_video
 
 
 def test_batch_with_bad_files(tmp_path, clip_frames):
@@ -112,7 +113,7 @@ def test_synth_and_evaluate_commands(tmp_path):
         "1",
     )
     assert result.exit_code == 0, result.output
-    assert decode_count(tmp_path / "s" / "video.mp4") == 12
+    assert count_decodable_frames(tmp_path / "s" / "video.mp4") == 12
     assert len(list((tmp_path / "s" / "truth").glob("*.png"))) == 12
     assert (
         invoke(
