@@ -24,7 +24,7 @@ from motiondetect.constraint_ray.plane import (
 )
 from motiondetect.constraint_ray.velocity_filter import gap_to_segment
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig
+from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, vector_length
 
 from .velocity_scenes import H, W, background, field_between
 
@@ -116,6 +116,28 @@ def test_a_judged_field_keeps_the_maps_already_computed():
     judged = field.judged(fit_camera(field, FitConfig()))
     assert judged.camera is not None and judged.structure is structure
     assert judged.source_px is source and judged.velocity_px is field.velocity_px
+
+
+def test_a_measured_field_comes_with_its_maps_already_made():
+    detector = MotionDetector("both")
+    assert detector.measure_frame(background(0.0)) is None
+    field = detector.measure_frame(background(3.0, 1.0))
+    assert {"structure", "source_px"} <= set(vars(field))  # made, not waiting
+    fresh = field_between(background(0.0), background(3.0, 1.0))
+    np.testing.assert_array_equal(field.source_px, fresh.source_px)
+    for made, again in zip(field.structure, fresh.structure, strict=True):
+        np.testing.assert_array_equal(made, again)
+
+
+@pytest.mark.parametrize("shape", [(48, 64, 2), (300, 2), (2,)])
+def test_vector_length_is_the_euclidean_length(shape):
+    vectors = np.random.default_rng(1).normal(0, 5, shape).astype(np.float32)
+    expected = np.hypot(vectors[..., 0], vectors[..., 1])
+    # Contiguous float32 (the fast path), float64, and components swapped (strided).
+    for given in (vectors, vectors.astype(np.float64), vectors[..., ::-1]):
+        length = vector_length(given)
+        assert length.shape == shape[:-1] and length.dtype == np.float32
+        np.testing.assert_allclose(length, expected, rtol=1e-6)
 
 
 def test_a_cut_is_unreliable_and_flags_nothing():

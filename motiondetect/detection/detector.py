@@ -218,7 +218,8 @@ class MotionDetector:
         can run on another thread while :meth:`judge` handles this one
         (:meth:`stream`). None for the first frame.
         """
-        return self.pipeline.process(frame)
+        flow = self.pipeline.process(frame)
+        return flow.prepared() if isinstance(flow, VelocityField) else flow
 
     def judge(self, flow: object | None, index: int, time_s: float) -> FrameResult:
         """The second half of :meth:`process`: detectors, fusion and objects

@@ -168,6 +168,15 @@ class VelocityField:
             out.__dict__.setdefault(name, value)  # fields are set; only caches are missing
         return out
 
+    def prepared(self) -> VelocityField:
+        """This field, with the maps every judgement reads (``source_px``,
+        ``structure``) computed now: the detector makes them with the
+        measurement, on the measuring thread when it runs ahead, so that the
+        judging thread does not."""
+        for name in ("source_px", "structure"):
+            getattr(self, name)
+        return self
+
     @cached_property
     def source_px(self) -> np.ndarray:
         """(h, w, 2) float32: where each pixel was in the previous frame,
@@ -194,11 +203,12 @@ class VelocityField:
 def vector_length(vectors: np.ndarray) -> np.ndarray:
     """Length of each 2-D vector, (...) float32 from (..., 2).
 
-    A (h, w, 2) float32 field goes through ``cv2.magnitude`` on its two
-    planes, about 3x faster than ``np.hypot`` on the strided components.
+    A contiguous float32 field is read as complex numbers, whose absolute
+    value is the length: about 7x faster than ``np.hypot`` on the strided
+    components and 2.5x faster than splitting it for ``cv2.magnitude``.
     """
-    if vectors.ndim == 3 and vectors.dtype == np.float32 and vectors.flags.c_contiguous:
-        return cv2.magnitude(*cv2.split(vectors))
+    if vectors.dtype == np.float32 and vectors.flags.c_contiguous and vectors.ndim:
+        return np.abs(vectors.view(np.complex64))[..., 0]
     return np.hypot(vectors[..., 0], vectors[..., 1]).astype(np.float32)
 
 
