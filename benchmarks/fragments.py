@@ -1,0 +1,100 @@
+r"""One mover, several boxes: how often a labelled object is reported in parts.
+
+    python benchmarks/fragments.py davis
+    python benchmarks/fragments.py davis,ucsd,sbi,sample '{"track": {"persistence": 3}}'
+
+Issue 13 asks for objects, not fragments: one person should be one box. For
+every labelled object (a connected part of a ground-truth mask, as
+``motiondetect evaluate`` counts them) on every scored frame, a box
+*covers* it when more than 5 % of the object's pixels lie inside the box.
+The object is *boxed* when at least one box covers it, and *split* when two
+or more do. Scores come from the default detector, or from the config
+sections given as JSON (as in ``sweep.py``). Only data sets with masks are
+counted: OTB has one box per frame, and the fox clip has no mover.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from multiprocessing import Pool
+
+import compare
+import cv2
+import numpy as np
+
+from motiondetect.app.settings import SECTIONS
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.video import open_source, read_mask
+from motiondetect.tools.evaluate import truth_masks
+
+#: Share of an object's pixels a box must hold to cover it.
+COVER = 0.05
+#: Smallest object counted, px (``motiondetect evaluate``'s default).
+MIN_OBJECT_PX = 20
+
+
+def boxes_per_object(truth: np.ndarray, boxes: list) -> list[int]:
+    """For each labelled object in ``truth`` (a ground-truth mask), how many of
+    ``boxes`` ((x, y, w, h) in its pixels) cover it."""
+    positive, _ = truth_masks(truth)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(positive.view(np.uint8), connectivity=8)
+    counts = []
+    for label in range(1, n):
+        area = stats[label, cv2.CC_STAT_AREA]
+        if area < MIN_OBJECT_PX:
+            continue
+        inside = (labels[y : y + h, x : x + w] == label for x, y, w, h in boxes)
+        counts.append(sum(int(part.sum()) > COVER * area for part in inside))
+    return counts
+
+
+def _run(job: tuple) -> tuple[str, int, int]:
+    name, source, gt, configs = job
+    cv2.setNumThreads(1)
+    masks = compare.gt_masks(gt)
+    detector = MotionDetector("both", *configs)
+    boxed = split = 0
+    with open_source(source) as frames:
+        for frame in frames:
+            boxes = [
+                region.bbox
+                for region in detector.process(frame.image, frame.index, frame.time_s).regions
+            ]
+            if frame.index < compare.WARMUP or frame.index not in masks:
+                continue
+            counts = boxes_per_object(read_mask(masks[frame.index]), boxes)
+            boxed += sum(c >= 1 for c in counts)
+            split += sum(c >= 2 for c in counts)
+    return name, boxed, split
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sbi,sample")
+    parser.add_argument("config", nargs="?", default="{}", help="JSON: config sections")
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    spec = json.loads(args.config)
+    configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
+    groups = args.datasets.split(",")
+    jobs = [
+        (name, source, gt, configs)
+        for name, source, gt, _ in compare.sequences(quick=False)
+        if gt is not None and gt.suffix != ".txt" and any(name.startswith(g) for g in groups)
+    ]
+    with Pool(args.jobs) as pool:
+        results = pool.map(_run, jobs, chunksize=1)
+    for group in groups:
+        rows = [r for r in results if r[0].startswith(group)]
+        for name, boxed, split in rows:
+            print(f"  {name:28s} boxed {boxed:4d}  split {split:4d}")
+        boxed, split = sum(r[1] for r in rows), sum(r[2] for r in rows)
+        print(f"{group:30s} boxed {boxed:4d}  split {split:4d} ({split / max(boxed, 1):.2f})")
+
+
+if __name__ == "__main__":
+    main()
