@@ -5,6 +5,8 @@
     python benchmarks/throughput.py --batch         # --jobs 2 against --jobs 1
     python benchmarks/throughput.py --encode        # writing the annotated video, per preset
     python benchmarks/throughput.py --ahead         # measuring ahead on a 2nd thread vs serial
+    python benchmarks/throughput.py --real          # whole processes on real clips, MOG2, dvr-scan
+    python benchmarks/throughput.py --sizes --frames 150   # the same from 512 px to 4K
 
 Speed: ``detect`` end to end (decode included) in several variants, and in
 the same run on the same file decode-only and OpenCV MOG2 per frame. Each
@@ -251,26 +253,41 @@ def whole_process(cmd: list[str]) -> float:
     return time.perf_counter() - t
 
 
+#: Frame sizes of ``--sizes``: the issues' 512x512 clip, then what cameras record.
+SIZES = ((512, 512), (1280, 720), (1920, 1080), (3840, 2160))
+
+
+def whole_processes(clip: Path, tmp: Path, dvr: str | None) -> str:
+    """One line: detect (and detect --frame-skip 1) against MOG2 (default
+    threads) and dvr-scan -so on ``clip``, each a whole process."""
+    out = tmp / "real"
+    detect = [sys.executable, "-m", "motiondetect_cli.main", "detect", str(clip), "-o",
+              str(out), "-q", "--no-video", "--overwrite"]  # fmt: skip
+    ours = whole_process(detect)
+    skip = whole_process([*detect, "--frame-skip", "1"])
+    mog_code = f"import sys;sys.path.insert(0,{str(HERE)!r});from common import mog2_on;"
+    mog = whole_process([sys.executable, "-c", mog_code + f"mog2_on({str(clip)!r})"])
+    line = f"  {clip.name}: motiondetect {ours:.2f} s, MOG2 {mog:.2f} s ({mog / ours:.2f}x)"
+    scan = whole_process([dvr, "-i", str(clip), "-so", "-q"]) if dvr else None
+    line += f", dvr-scan -so {scan:.2f} s ({scan / ours:.2f}x)" if scan else ", no dvr-scan"
+    line += f"; --frame-skip 1 {skip:.2f} s ({mog / skip:.2f}x MOG2"
+    return line + (f", {scan / skip:.2f}x dvr-scan)" if scan else ")")
+
+
 def real(tmp: Path) -> None:
-    """Whole processes on real clips: detect (and detect --frame-skip 1) vs MOG2
-    (default threads) vs dvr-scan -so."""
+    """Whole processes on real clips (:func:`whole_processes`)."""
     dvr = shutil.which("dvr-scan")
     for clip in real_clips(tmp):
-        out = tmp / "real"
-        detect = [sys.executable, "-m", "motiondetect_cli.main", "detect", str(clip), "-o",
-                  str(out), "-q", "--no-video", "--overwrite"]  # fmt: skip
-        ours = whole_process(detect)
-        skip = whole_process([*detect, "--frame-skip", "1"])
-        mog_code = f"import sys;sys.path.insert(0,{str(HERE)!r});from common import mog2_on;"
-        mog = whole_process([sys.executable, "-c", mog_code + f"mog2_on({str(clip)!r})"])
-        line = f"  {clip.name}: motiondetect {ours:.2f} s, MOG2 {mog:.2f} s ({mog / ours:.2f}x)"
-        if dvr:
-            scan = whole_process([dvr, "-i", str(clip), "-so", "-q"])
-            line += f", dvr-scan -so {scan:.2f} s ({scan / ours:.2f}x)"
-        else:
-            line += ", dvr-scan not installed"
-        line += f"; --frame-skip 1 {skip:.2f} s ({mog / skip:.2f}x MOG2"
-        print(line + (f", {scan / skip:.2f}x dvr-scan)" if dvr else ")"))
+        print(whole_processes(clip, tmp, dvr))
+
+
+def sizes(tmp: Path, frames: int) -> None:
+    """Whole processes on the synthetic pan at each of :data:`SIZES`. detect
+    works at 320 px whatever the input, where MOG2 and dvr-scan work on
+    every pixel, so the ratios grow with the frame."""
+    dvr = shutil.which("dvr-scan")
+    for w, h in SIZES:
+        print(whole_processes(make_pan_clip(tmp / f"pan{w}x{h}.mp4", (w, h), frames), tmp, dvr))
 
 
 def ahead(clip: Path, tmp: Path, repeat: int) -> None:
@@ -314,6 +331,7 @@ def main() -> None:
     parser.add_argument("--batch", action="store_true")
     parser.add_argument("--videos", type=int, default=4, help="inputs of the --batch run")
     parser.add_argument("--real", action="store_true", help="whole processes on real clips")
+    parser.add_argument("--sizes", action="store_true", help="whole processes, 512 px to 4K")
     parser.add_argument("--quick", action="store_true", help="512x512 only")
     parser.add_argument("--encode", action="store_true", help="video writing cost per preset")
     parser.add_argument("--ahead", action="store_true", help="measuring ahead against serial")
@@ -328,6 +346,9 @@ def main() -> None:
             return
         if args.real:
             real(tmp)
+            return
+        if args.sizes:
+            sizes(tmp, args.frames)
             return
         if args.ahead:
             clips = [make_pan_clip(tmp / "clip512.mp4", (512, 512), args.frames)]
