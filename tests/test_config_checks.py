@@ -8,7 +8,7 @@ import pytest
 
 from motiondetect.animate.normal_footprints import AnimateConfig
 from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
-from motiondetect.constraint_ray.camera_fit import FitConfig
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.objects import TrackConfig

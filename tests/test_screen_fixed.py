@@ -5,7 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import fit_camera
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.objects import TrackConfig
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay

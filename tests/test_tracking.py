@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 from skimage import data
 
-from motiondetect.constraint_ray.camera_fit import FitConfig
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker

@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 from skimage import data
 
-from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import fit_camera
 from motiondetect.constraint_ray.epipole import off_ray
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
     fit_homography,
     mixture_log_likelihood,

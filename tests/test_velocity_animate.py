@@ -10,7 +10,7 @@ import pytest
 from skimage import data
 
 from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
-from motiondetect.constraint_ray.camera_fit import FitConfig
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.objects import TrackConfig
 from motiondetect.measurement.dense_flow import DenseFlowConfig

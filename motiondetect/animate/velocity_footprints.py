@@ -34,7 +34,8 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.camera_fit import FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import fit_camera
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import hysteresis, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField

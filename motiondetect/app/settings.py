@@ -30,7 +30,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 from motiondetect.animate.normal_footprints import AnimateConfig
 from motiondetect.animate.velocity_footprints import VelocityAnimateConfig
 from motiondetect.app.times import TimeSpec, parse_time
-from motiondetect.constraint_ray.camera_fit import FitConfig
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.normal_filter import ConstraintRayConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.events import EventRules

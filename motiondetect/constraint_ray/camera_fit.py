@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.epipole import fit_epipole, off_ray
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
     MEDIAN_TO_SIGMA,
     explained_share,
@@ -43,120 +43,6 @@ from motiondetect.measurement.image_change import difference_noise, plane_differ
 
 #: Median speed below which a frame without parallax counts as static, px/frame.
 STATIC_SPEED_PX = 0.3
-
-
-@dataclass(frozen=True)
-class FitConfig:
-    """Settings of the observer-motion fit.
-
-    Attributes
-    ----------
-    sample_step_px : int
-        Grid step of the velocity samples fed to RANSAC, work px.
-    ransac_px : float
-        RANSAC inlier threshold, work px/frame: what counts as explained by
-        the plane (the inlier share, the noise).
-    tight_px : float
-        RANSAC also runs at this threshold (three times DIS's 0.1 px error;
-        0: off), and the plane under which the velocities are likelier is
-        kept (:func:`~.plane.fit_homography`): at 1 px a slow mover or a
-        near surface pulls the plane toward itself (docs/detectors.md).
-        The outliers of that likelihood spread over ``max_speed_px``.
-    min_inlier_share : float
-        Below this share of samples the homography explains (as far as the
-        image determines them: :func:`explained_share`) the frame cannot be
-        judged.
-    max_speed_px : float
-        Median speed above which the motion is outside the measurable band.
-    cut_grey : float
-        Mean absolute grey difference between the frame and the previous
-        one warped by the fit above which the frame is taken as a cut.
-    parallax_sigmas : float
-        Residuals above this many noise sigmas count as parallax evidence.
-    min_parallax_blocks : int
-        The epipole's support must cover at least this many of the 4x4
-        blocks of the frame (a mover's parallel residuals cover few).
-    max_flagged_share : float
-        A frame whose grouped objects cover more than this share of it
-        cannot be judged: the fit's premise, that the rigid world is the
-        dominant motion, has failed (fast turns, heavy blur). Off (1.0) by
-        default: at 0.4 it marks woman.mp4's fast turn (frames 447-450)
-        unreliable, but it also discards most frames of parallax-rich scenes
-        and of moving water, where the mover is still found (sample
-        fixation_waving object recall 0.90 -> 0.09; UCSD birds 0.75 -> 0).
-    blur_ratio : float
-        A frame whose sharpness (variance of its Laplacian) falls below this
-        share of the median of the last ``blur_history`` frames is heavily
-        blurred (a fast turn, a shake): its flow cannot be trusted. 0: off.
-    blur_history : int
-        Frames the sharpness reference is the median of.
-    aperture_noise : float
-        A residual velocity component counts half where the flow patch's
-        gradient energy along it equals the square of this many robust
-        sigmas of the frame's image difference (``change_noise``); less
-        where the image leaves it undetermined (a straight edge, stripes),
-        more where it pins it down (:mod:`~motiondetect.measurement.aperture`).
-        Seeds of both detectors are tested on that determined residual
-        (0: on the whole residual); under known ego-motion the constraint
-        ray keeps its depth-bounded test on the whole residual.
-    edge_px : float
-        Width of the band along the frame edge where content enters or
-        leaves and the flow is extrapolated, work px, on top of the frame's
-        median speed (``CameraFit.edge_band_px``); detectors do not test it.
-    parallax : bool
-        Fit an epipole and test only the residual across each point's ray.
-        Off by default: measured on every data set, the fitted epipole was
-        captured by movers (one mover's parallel residuals fit an epipole
-        at infinity) more often than it explained real parallax, and cost
-        recall everywhere (docs/detectors.md). Without it the ray of every
-        point is the plane's velocity alone, and any residual is tested.
-    focal_share : float
-        Lens prior: the focal length as a share of the frame's long side
-        (0.75: a phone's main camera, 26 mm equivalent), for decomposing
-        the plane's motion into the constraint ray
-        (:mod:`~.plane_ray`; 0: no decomposition).
-    """
-
-    sample_step_px: int = 8
-    ransac_px: float = 1.0
-    tight_px: float = 0.3
-    min_inlier_share: float = 0.25
-    max_speed_px: float = 30.0
-    cut_grey: float = 40.0
-    parallax_sigmas: float = 4.0
-    min_parallax_blocks: int = 6
-    max_flagged_share: float = 1.0
-    blur_ratio: float = 1.0 / 3.0
-    blur_history: int = 30
-    aperture_noise: float = 1.0
-    edge_px: float = 4.0
-    parallax: bool = False
-    focal_share: float = 0.75
-
-    def __post_init__(self) -> None:
-        check_fields(
-            self,
-            positive=(
-                "sample_step_px",
-                "ransac_px",
-                "max_speed_px",
-                "cut_grey",
-                "parallax_sigmas",
-                "blur_history",
-            ),
-            non_negative=(
-                "min_inlier_share",
-                "tight_px",
-                "min_parallax_blocks",
-                "max_flagged_share",
-                "blur_ratio",
-                "aperture_noise",
-                "edge_px",
-                "focal_share",
-            ),
-        )
-        if self.min_inlier_share >= 1:
-            raise ValueError(f"min_inlier_share must be below 1, got {self.min_inlier_share}")
 
 
 @dataclass(frozen=True)

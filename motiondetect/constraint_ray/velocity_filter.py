@@ -44,8 +44,9 @@ import cv2
 import numpy as np
 
 from motiondetect.config_checks import check_fields
-from motiondetect.constraint_ray.camera_fit import CameraFit, FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import CameraFit, fit_camera
 from motiondetect.constraint_ray.epipole import off_ray
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
 from motiondetect.constraint_ray.plane import residual_spread
 from motiondetect.detection.base import DetectorOutput

@@ -22,7 +22,8 @@ from collections.abc import Iterable, Iterator
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, FitConfig, fit_camera
+from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, fit_camera
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection import streaming
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
