@@ -53,11 +53,12 @@ def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = T
         assert record["frame"] == i
     rows = list(csv.reader((out / "detections.csv").read_text().splitlines()))
     assert rows[0] == [
-        "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track",
+        "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track", "held",
     ]  # fmt: skip
     assert len(rows) - 1 == summary["totals"]["detections"]
-    tracks = [str(d.get("track", "")) for r in map(json.loads, lines) for d in r["detections"]]
-    assert [row[-1] for row in rows[1:]] == tracks
+    records = [d for r in map(json.loads, lines) for d in r["detections"]]
+    tracks = [(str(d.get("track", "")), "1" if d.get("held") else "") for d in records]
+    assert [(row[-2], row[-1]) for row in rows[1:]] == tracks
     assert (out / "events.csv").exists()
     check_tracks(out, rows[1:], summary)
     assert (out / "timeline.png").exists() == timeline
@@ -73,8 +74,8 @@ def check_tracks(out: Path, detections: list[list[str]], summary: dict) -> list[
     assert len(tracks) == summary["totals"]["tracks"]
     by_id: dict[str, list] = {}
     for row in detections:
-        if row[-1]:
-            by_id.setdefault(row[-1], []).append(row)
+        if row[9]:  # the track column
+            by_id.setdefault(row[9], []).append(row)
     assert sorted(t["track"] for t in tracks) == sorted(by_id)
     for t in tracks:
         rows = by_id[t["track"]]

@@ -11,7 +11,8 @@ from skimage import data
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker
+from motiondetect.detection.objects import MovingObject, TrackConfig
+from motiondetect.detection.tracking import Tracker
 
 from .velocity_scenes import H, W, background, pan_with_mover
 
@@ -85,3 +86,55 @@ def test_most_of_the_frame_off_the_fit_can_mark_a_frame_unreliable():
     default_reasons = [default.process(f, i, i / 30).reason for i, f in enumerate(frames)]
     assert strict_reasons[:4] == [""] * 4 and reason in strict_reasons[5:]
     assert reason not in default_reasons
+
+
+def _seen(x0: float, v: float = 5.0) -> MovingObject:
+    mask = np.zeros((60, 120), bool)
+    mask[20:30, int(x0) : int(x0) + 10] = True
+    return MovingObject(mask, (int(x0), 20, int(x0) + 10, 30), (v, 0.0))
+
+
+def test_an_established_track_missed_on_a_frame_is_held_where_it_moved():
+    """A track seen on ``hold_age`` frames and then missed is reported for
+    ``hold_frames`` frames more, its last mask moved on by its velocity and
+    marked held; a younger track is not, and neither is one missed longer."""
+    tracker = Tracker(TrackConfig(persistence=2, hold_frames=1, hold_age=4))
+    for t in range(4):
+        seen = tracker.update([_seen(5.0 * t)])
+    last = seen[0]
+    assert not last.held and last.age == 4
+    held = tracker.update([])
+    assert [o.track for o in held] == [last.track] and held[0].held
+    np.testing.assert_array_equal(held[0].mask, np.roll(last.mask, 5, axis=1))
+    assert held[0].box == (20, 20, 30, 30)
+    assert tracker.update([]) == []  # held for one frame only
+    young = Tracker(TrackConfig(persistence=2, hold_frames=1, hold_age=4))
+    for t in range(3):
+        young.update([_seen(5.0 * t)])
+    assert young.update([]) == []  # seen on 3 frames: not established
+
+
+def test_a_mover_that_stops_moving_is_held_for_one_frame():
+    """The patch moves across the pan, then rides with the background (rigid
+    from frame 14): its track, once missed, is reported held on that one
+    frame, where its motion puts it, naming the detectors that found it."""
+
+    def path(t):
+        return (60 + 3 * min(t, 14) - 2 * max(t - 14, 0), 100.0)
+
+    clip = pan_with_mover(path, frames=32)
+    md = MotionDetector("both")
+    results = [md.process(image, t, t / 30) for t, (image, _) in enumerate(clip)]
+    found = {t: {r.track: r for r in res.regions} for t, res in enumerate(results)}
+    held = [(t, r) for t, regions in found.items() for r in regions.values() if r.held]
+    assert held and all(t > 14 for t, _ in held)  # the moving patch is never missed
+    for t, region in held:
+        before = found[t - 1].get(region.track)
+        assert before is not None and not before.held  # seen on the frame before
+        assert region.track not in found[t + 1]  # then no more
+        assert region.detectors == before.detectors
+        record = region.to_json()
+        assert record["held"] is True and record["track"] == region.track
+        x, y, w, h = region.bbox
+        px, py = path(t)
+        assert abs(x + w / 2 - (px + 24)) < 16 and abs(y + h / 2 - (py + 24)) < 16

@@ -31,11 +31,12 @@ from motiondetect.detection.change_history import BackgroundMemory, ChangeHistor
 from motiondetect.detection.frame_result import FrameResult
 from motiondetect.detection.framing import Framing
 from motiondetect.detection.layers import assigned_objects
-from motiondetect.detection.objects import MovingObject, TrackConfig, Tracker, group_objects
+from motiondetect.detection.objects import MovingObject, TrackConfig, group_objects
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.detection.rigid_depth import RigidDepth
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
 from motiondetect.detection.streaming import F
+from motiondetect.detection.tracking import Tracker
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
 from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
 from motiondetect.measurement.picture import Picture
@@ -69,9 +70,13 @@ def fuse(
 
 
 def object_region(
-    obj: MovingObject, outputs: dict[str, DetectorOutput], geometry: GridGeometry
+    obj: MovingObject,
+    outputs: dict[str, DetectorOutput],
+    geometry: GridGeometry,
+    found_before: tuple[str, ...] = (),
 ) -> Region:
-    """A tracked object as a reported region, in input pixels."""
+    """A tracked object as a reported region, in input pixels; a held one
+    names ``found_before``, the detectors that found its track last."""
     sx = geometry.input_size[0] / geometry.work_size[0]
     sy = geometry.input_size[1] / geometry.work_size[1]
     x0, y0, x1, y1 = obj.box
@@ -82,7 +87,9 @@ def object_region(
     found = tuple(n for n, out in outputs.items() if (out.mask[inside] & own).any())
     strength = max(float(out.pixel_strength[inside][own].mean()) for out in outputs.values())
     area = round(float(own.sum()) * sx * sy)
-    return Region(bbox, cells, area, strength, found, obj.track)
+    if obj.held:
+        found = found_before or found
+    return Region(bbox, cells, area, strength, found, obj.track, obj.held)
 
 
 class MotionDetector:
@@ -152,6 +159,7 @@ class MotionDetector:
         self._picture: Picture | None = None
         self._last: FrameResult | None = None  # held for a repeated frame
         self._last_time: float | None = None  # of the last frame measured
+        self._found_by: dict[int, tuple[str, ...]] = {}  # the reported tracks' detectors
 
     def reset(self) -> None:
         """Start afresh (a new input, or after a gap in the frames)."""
@@ -162,6 +170,7 @@ class MotionDetector:
         """Forget what :meth:`judge` keeps (not the measurement's state,
         which the measuring thread owns)."""
         self._last = self._last_time = None
+        self._found_by = {}
         self.tracker.reset()
         for det in self.detectors.values():
             det.reset()
@@ -289,7 +298,11 @@ class MotionDetector:
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )
         confirmed = self.tracker.update(objects)
-        regions = [object_region(obj, outputs, flow.geometry) for obj in confirmed]
+        regions = [
+            object_region(obj, outputs, flow.geometry, self._found_by.get(obj.track, ()))
+            for obj in confirmed
+        ]
+        self._found_by = {r.track: r.detectors for r in regions if r.detectors}
         mask = np.zeros(flow.shape, bool)
         for obj in confirmed:
             mask |= obj.mask

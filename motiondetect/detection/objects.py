@@ -1,19 +1,12 @@
-"""Objects, not fragments: flagged pixels grouped into movers, kept as tracks.
+"""Objects, not fragments: flagged pixels grouped into movers.
 
 1. **Group.** Flagged pixels are kept where the image itself changed (or
    next to such a change), so a mask does not spill over the background
    that dense flow smears the mover's velocity into. Pixels closer than
    ``gap_px`` belong to one object (one walker is one box, not three); an
    object's mask is closed over its gaps and its holes are filled.
-2. **Track.** Each object is matched to the track whose box, moved by the
-   track's own image velocity (which includes the camera's motion), it
-   overlaps most. Tracks keep a stable integer id.
-3. **Persist.** An object is reported once its track has been seen on
-   ``persistence`` frames; a track survives ``max_missed`` frames unseen,
-   frames that cannot be judged included, but not a cut: the shot after it
-   starts with no tracks (a box there overlaps one before it only by chance).
-4. **Expect** (optional, ``prior``). Where a confirmed track is predicted,
-   the constraint ray needs less evidence to seed.
+2. **Track**, **persist**, **hold** and **expect**: :mod:`.tracking`, with
+   the settings of both in :class:`TrackConfig`.
 """
 
 from __future__ import annotations
@@ -41,6 +34,12 @@ class TrackConfig:
         Frames a track must be seen on before its objects are reported.
     max_missed : int
         Frames a track may go unseen before it ends.
+    hold_frames : int
+        Frames a confirmed track the detectors miss is still reported, at
+        its mask moved on by its own velocity and marked held (0: never;
+        :mod:`.tracking`).
+    hold_age : int
+        Frames a track must have been seen on before it is held.
     min_iou : float
         Smallest overlap of a predicted track box and an object box that
         continues the track.
@@ -112,6 +111,8 @@ class TrackConfig:
     min_area_share: float = 0.0005
     persistence: int = 2
     max_missed: int = 5
+    hold_frames: int = 1
+    hold_age: int = 8
     min_iou: float = 0.1
     support_sigmas: float = 3.0
     support_px: int = 2
@@ -133,6 +134,8 @@ class TrackConfig:
                 "gap_px",
                 "min_area_share",
                 "max_missed",
+                "hold_frames",
+                "hold_age",
                 "min_iou",
                 "support_sigmas",
                 "support_px",
@@ -160,6 +163,7 @@ class MovingObject:
     velocity_px: tuple[float, float]  # mean image velocity
     track: int = 0
     age: int = 1
+    held: bool = False  # not found this frame: where its track predicts it
 
 
 def group_objects(
@@ -293,92 +297,3 @@ def trimmed(
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     cut = (labels == largest).astype(np.uint8)
     return cut if cut.sum() >= share * own.sum() else own
-
-
-def box_iou(a: tuple, b: tuple) -> float:
-    """Intersection over union of two (x0, y0, x1, y1) boxes."""
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
-
-
-@dataclass
-class _Track:
-    id: int
-    box: tuple[float, float, float, float]
-    velocity: tuple[float, float]
-    age: int = 1
-    missed: int = 0
-
-    def predicted(self) -> tuple[float, float, float, float]:
-        """The box moved on by its velocity over the frames since it was seen."""
-        dx, dy = (v * (self.missed + 1) for v in self.velocity)
-        x0, y0, x1, y1 = self.box
-        return (x0 + dx, y0 + dy, x1 + dx, y1 + dy)
-
-
-class Tracker:
-    """Stable ids for objects across frames. State: the live tracks."""
-
-    def __init__(self, config: TrackConfig | None = None) -> None:
-        self.config = config or TrackConfig()
-        self.reset()
-
-    def reset(self) -> None:
-        self._tracks: list[_Track] = []
-        self._next_id = 1
-
-    def coast(self, cut: bool = False) -> None:
-        """A frame without judgement: tracks age toward their end, none is
-        matched; a ``cut`` ends them all (ids stay unique within the input)."""
-        if cut:
-            self._tracks = []
-            return
-        for track in self._tracks:
-            track.missed += 1
-        self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
-
-    def predicted_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
-        """Where the confirmed tracks should be now: their boxes moved by their
-        own velocity, (h, w) bool; None without any."""
-        confirmed = [t for t in self._tracks if t.age >= self.config.persistence]
-        if not confirmed:
-            return None
-        mask = np.zeros(shape, bool)
-        for track in confirmed:
-            x0, y0, x1, y1 = track.predicted()
-            rows = slice(max(int(y0), 0), max(int(np.ceil(y1)), 0))
-            mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
-        return mask
-
-    def update(self, objects: list[MovingObject]) -> list[MovingObject]:
-        """Match this frame's objects to tracks; return the confirmed ones with ids."""
-        cfg = self.config
-        free = list(range(len(self._tracks)))
-        confirmed = []
-        for obj in objects:
-            best, best_iou = None, cfg.min_iou
-            for i in free:
-                iou = box_iou(self._tracks[i].predicted(), obj.box)
-                if iou >= best_iou:
-                    best, best_iou = i, iou
-            if best is None:
-                track = _Track(self._next_id, obj.box, obj.velocity_px)
-                self._next_id += 1
-                self._tracks.append(track)
-            else:
-                free.remove(best)
-                track = self._tracks[best]
-                track.box, track.velocity = obj.box, obj.velocity_px
-                track.age, track.missed = track.age + 1, 0
-            if track.age >= cfg.persistence:
-                confirmed.append(
-                    MovingObject(obj.mask, obj.box, obj.velocity_px, track.id, track.age)
-                )
-        matched = {t.id for t in self._tracks} - {self._tracks[i].id for i in free}
-        for i in free:
-            self._tracks[i].missed += 1
-        self._tracks = [t for t in self._tracks if t.id in matched or t.missed <= cfg.max_missed]
-        return confirmed

@@ -30,6 +30,9 @@ class Region:
         Which detectors found it.
     track : int or None
         Stable id of the object across frames (velocity path).
+    held : bool
+        Not found on this frame: a confirmed track reported where its own
+        motion puts it (``detectors`` are those that found it last).
     """
 
     bbox: list[int]
@@ -38,6 +41,7 @@ class Region:
     score: float
     detectors: tuple[str, ...] = field(default_factory=tuple)
     track: int | None = None
+    held: bool = False
 
     def to_json(self) -> dict:
         out = {
@@ -48,6 +52,8 @@ class Region:
         }
         if self.track is not None:
             out["track"] = int(self.track)
+        if self.held:
+            out["held"] = True
         return out
 
 

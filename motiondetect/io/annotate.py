@@ -115,16 +115,17 @@ def draw_boxes(
     out: np.ndarray, detections: list[dict], sx: float = 1.0, sy: float = 1.0
 ) -> np.ndarray:
     """Draw detection records (as in frames.jsonl) on ``out`` in place: a box
-    coloured by detector, the track id and the score; ``sx, sy`` scale the
-    input-pixel boxes to ``out``."""
+    coloured by detector, the track id and the score (a held track's box
+    thin, labelled "held"); ``sx, sy`` scale the input-pixel boxes to ``out``."""
     for det in detections:
         x, y, w, h = det["bbox"]
         colour = _box_colour(det)
         p0 = (int(x * sx), int(y * sy))
         p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
-        cv2.rectangle(out, p0, p1, colour, 2)
+        cv2.rectangle(out, p0, p1, colour, 1 if det.get("held") else 2)
         label = f"#{det['track']} " if "track" in det else ""
-        _text(out, f"{label}{det['score']:.2f}", (p0[0] + 2, p0[1] + 14), colour)
+        score = "held" if det.get("held") else f"{det['score']:.2f}"
+        _text(out, f"{label}{score}", (p0[0] + 2, p0[1] + 14), colour)
     return out
 
 

@@ -17,9 +17,11 @@ from typing import TextIO
 
 SCHEMA_VERSION = "1.0"
 
-# ``track``: the object's track id (empty where the detector keeps no tracks).
+# ``track``: the object's track id (empty where the detector keeps no tracks);
+# ``held``: 1 where the track was not found on the frame and is reported where
+# its own motion puts it (docs/detectors.md, "Held tracks"), else empty.
 DETECTION_COLUMNS = [
-    "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track",
+    "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track", "held",
 ]  # fmt: skip
 EVENT_COLUMNS = [
     "event",
@@ -99,6 +101,7 @@ class DetectionsCsvWriter:
                 detection["area_px"],
                 f"{detection['score']:.4f}",
                 detection.get("track", ""),
+                1 if detection.get("held") else "",
             ]
         )
 

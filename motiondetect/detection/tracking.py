@@ -1,0 +1,139 @@
+"""Objects kept across frames: stable ids, persistence and held tracks.
+
+1. **Track.** Each object is matched to the track whose box, moved by the
+   track's own image velocity (which includes the camera's motion), it
+   overlaps most. Tracks keep a stable integer id.
+2. **Persist.** An object is reported once its track has been seen on
+   ``persistence`` frames; a track survives ``max_missed`` frames unseen,
+   frames that cannot be judged included, but not a cut: the shot after it
+   starts with no tracks (a box there overlaps one before it only by chance).
+3. **Hold.** A mover does not vanish for one frame, though its detection
+   may: the flow blurs, the image-change gate finds no change on a plain
+   stretch, a limb stops as it turns. A track seen on ``hold_age`` frames
+   that the detectors miss on a judged frame is still reported for
+   ``hold_frames`` frames, its last mask moved on by its own velocity and
+   marked ``held`` (docs/detectors.md, "Held tracks"). A frame that cannot
+   be judged holds nothing.
+4. **Expect** (optional, ``prior``). Where a confirmed track is predicted,
+   the constraint ray needs less evidence to seed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from motiondetect.detection.objects import MovingObject, TrackConfig
+
+
+def box_iou(a: tuple, b: tuple) -> float:
+    """Intersection over union of two (x0, y0, x1, y1) boxes."""
+    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
+    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
+    inter = ix * iy
+    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
+    return inter / union if union > 0 else 0.0
+
+
+@dataclass
+class _Track:
+    id: int
+    box: tuple[float, float, float, float]
+    velocity: tuple[float, float]
+    age: int = 1
+    missed: int = 0
+    mask: np.ndarray | None = None  # (h, w) bool: as last seen
+
+    def predicted(self) -> tuple[float, float, float, float]:
+        """The box moved on by its velocity over the frames since it was seen."""
+        dx, dy = (v * (self.missed + 1) for v in self.velocity)
+        x0, y0, x1, y1 = self.box
+        return (x0 + dx, y0 + dy, x1 + dx, y1 + dy)
+
+
+class Tracker:
+    """Stable ids for objects across frames. State: the live tracks."""
+
+    def __init__(self, config: TrackConfig | None = None) -> None:
+        self.config = config or TrackConfig()
+        self.reset()
+
+    def reset(self) -> None:
+        self._tracks: list[_Track] = []
+        self._next_id = 1
+
+    def coast(self, cut: bool = False) -> None:
+        """A frame without judgement: tracks age toward their end, none is
+        matched; a ``cut`` ends them all (ids stay unique within the input)."""
+        if cut:
+            self._tracks = []
+            return
+        for track in self._tracks:
+            track.missed += 1
+        self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
+
+    def predicted_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
+        """Where the confirmed tracks should be now: their boxes moved by their
+        own velocity, (h, w) bool; None without any."""
+        confirmed = [t for t in self._tracks if t.age >= self.config.persistence]
+        if not confirmed:
+            return None
+        mask = np.zeros(shape, bool)
+        for track in confirmed:
+            x0, y0, x1, y1 = track.predicted()
+            rows = slice(max(int(y0), 0), max(int(np.ceil(y1)), 0))
+            mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
+        return mask
+
+    def update(self, objects: list[MovingObject]) -> list[MovingObject]:
+        """Match this frame's objects to tracks; return the confirmed ones with ids."""
+        cfg = self.config
+        free = list(range(len(self._tracks)))
+        confirmed = []
+        for obj in objects:
+            best, best_iou = None, cfg.min_iou
+            for i in free:
+                iou = box_iou(self._tracks[i].predicted(), obj.box)
+                if iou >= best_iou:
+                    best, best_iou = i, iou
+            if best is None:
+                track = _Track(self._next_id, obj.box, obj.velocity_px)
+                self._next_id += 1
+                self._tracks.append(track)
+            else:
+                free.remove(best)
+                track = self._tracks[best]
+                track.box, track.velocity = obj.box, obj.velocity_px
+                track.age, track.missed = track.age + 1, 0
+            track.mask = obj.mask
+            if track.age >= cfg.persistence:
+                confirmed.append(
+                    MovingObject(obj.mask, obj.box, obj.velocity_px, track.id, track.age)
+                )
+        matched = {t.id for t in self._tracks} - {self._tracks[i].id for i in free}
+        for i in free:
+            self._tracks[i].missed += 1
+            held = _held(self._tracks[i], cfg)
+            if held is not None:
+                confirmed.append(held)
+        self._tracks = [t for t in self._tracks if t.id in matched or t.missed <= cfg.max_missed]
+        return confirmed
+
+
+def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
+    """A missed track's last mask moved on by its velocity over the frames
+    since it was seen, as a held object; None when it is too young, missed
+    too long, or moved out of the frame."""
+    if track.mask is None or track.missed > config.hold_frames or track.age < config.hold_age:
+        return None
+    dx, dy = (v * track.missed for v in track.velocity)
+    h, w = track.mask.shape
+    shift = np.float32([[1, 0, dx], [0, 1, dy]])
+    mask = cv2.warpAffine(track.mask.view(np.uint8), shift, (w, h), flags=cv2.INTER_NEAREST) > 0
+    if not mask.any():
+        return None
+    ys, xs = np.nonzero(mask)
+    box = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+    return MovingObject(mask, box, track.velocity, track.id, track.age, held=True)
