@@ -114,3 +114,23 @@ def test_a_tracks_recent_path_is_drawn_behind_its_box():
     assert tuple(plain[70, 50]) == (128, 128, 128)  # no trails asked for
     later = annotate(grey, result(5 + TRAIL_FRAMES, 95), (320, 240), trails)
     assert tuple(later[70, 50]) == (128, 128, 128)  # the old path is gone
+
+
+def test_a_held_track_is_drawn_thin_and_labelled_held():
+    """A held region (its track missed on the frame) is drawn with a 1-px
+    box, thinner than a found one's, and says "held" where a found one
+    shows its score."""
+    grey = np.full((240, 320, 3), 128, np.uint8)
+
+    def drawn(held: bool) -> np.ndarray:
+        region = Region(
+            [100, 80, 60, 60], np.zeros((0, 2), int), 3600, 0.9, ("velocity-ray",), 3, held
+        )
+        result = FrameResult(9, 0.3, [region], np.zeros((64, 64), bool), None, None, None)
+        return np.all(annotate(grey, result, (320, 240)) == RAY, axis=2)
+
+    found, held = drawn(False), drawn(True)
+    side = (slice(100, 130), slice(95, 105))  # across the box's left side, below its label
+    assert held[side].any(axis=0).sum() == 1 < found[side].any(axis=0).sum()
+    label = (slice(80, 96), slice(100, 160))
+    assert not np.array_equal(found[label], held[label])  # "#3 held", not "#3 0.90"
