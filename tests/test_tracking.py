@@ -112,6 +112,10 @@ def test_an_established_track_missed_on_a_frame_is_held_where_it_moved():
     for t in range(3):
         young.update([_seen(5.0 * t)])
     assert young.update([]) == []  # seen on 3 frames: not established
+    unconfirmed = Tracker(TrackConfig(persistence=3, hold_frames=1, hold_age=1))
+    for t in range(2):
+        assert unconfirmed.update([_seen(5.0 * t)]) == []
+    assert unconfirmed.update([]) == []  # never reported, so never held
 
 
 def test_a_mover_that_stops_moving_is_held_for_one_frame():

@@ -31,7 +31,7 @@ class FitConfig:
         The outliers of that likelihood spread over ``max_speed_px``.
     min_inlier_share : float
         Below this share of samples the homography explains (as far as the
-        image determines them: :func:`explained_share`) the frame cannot be
+        image determines them: :func:`~.plane.explained_share`) the frame cannot be
         judged.
     max_speed_px : float
         Median speed above which the motion is outside the measurable band.

@@ -87,17 +87,23 @@ class Tracker:
             mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
         return mask
 
+    def _match(self, obj: MovingObject, candidates: list[int]) -> int | None:
+        """The index among ``candidates`` of the track ``obj`` continues: the
+        one whose predicted box it overlaps most, at least ``min_iou``."""
+        best, best_iou = None, self.config.min_iou
+        for i in candidates:
+            iou = box_iou(self._tracks[i].predicted(), obj.box)
+            if iou >= best_iou:
+                best, best_iou = i, iou
+        return best
+
     def update(self, objects: list[MovingObject]) -> list[MovingObject]:
         """Match this frame's objects to tracks; return the confirmed ones with ids."""
         cfg = self.config
         free = list(range(len(self._tracks)))
         confirmed = []
         for obj in objects:
-            best, best_iou = None, cfg.min_iou
-            for i in free:
-                iou = box_iou(self._tracks[i].predicted(), obj.box)
-                if iou >= best_iou:
-                    best, best_iou = i, iou
+            best = self._match(obj, free)
             if best is None:
                 track = _Track(self._next_id, obj.box, obj.velocity_px)
                 self._next_id += 1
@@ -126,7 +132,8 @@ def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
     """A missed track's last mask moved on by its velocity over the frames
     since it was seen, as a held object; None when it is too young, missed
     too long, or moved out of the frame."""
-    if track.mask is None or track.missed > config.hold_frames or track.age < config.hold_age:
+    established = max(config.hold_age, config.persistence)  # a held track is a confirmed one
+    if track.mask is None or track.missed > config.hold_frames or track.age < established:
         return None
     dx, dy = (v * track.missed for v in track.velocity)
     h, w = track.mask.shape
