@@ -9,22 +9,21 @@ every labelled object (a connected part of a ground-truth mask, as
 *covers* it when more than 5 % of the object's pixels lie inside the box.
 The object is *boxed* when at least one box covers it, and *split* when two
 or more do. Scores come from the default detector, or from the config
-sections given as JSON (as in ``sweep.py``). Only data sets with masks are
+sections given as JSON (``sweep.configs``). Only data sets with masks are
 counted: OTB has one box per frame, and the fox clip has no mover.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 from multiprocessing import Pool
 
 import compare
 import cv2
 import numpy as np
+import sweep
 
-from motiondetect.app.settings import SECTIONS
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import truth_masks
@@ -79,7 +78,7 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
     spec = json.loads(args.config)
-    configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
+    configs = sweep.configs(spec)
     groups = args.datasets.split(",")
     jobs = [
         (name, source, gt, configs)

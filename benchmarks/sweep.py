@@ -37,6 +37,12 @@ from motiondetect.app.settings import SECTIONS
 from motiondetect.tools.evaluate import Counts
 
 
+def configs(sections: dict) -> list:
+    """Config dataclasses from ``{"section": {field: value}}``, each section's
+    defaults with the fields given changed."""
+    return [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in sections.items()]
+
+
 def method(name: str, spec: dict):
     """One variant as a per-frame method of ``compare.run_sequence``, named ``name``."""
     spec = dict(spec)
@@ -48,8 +54,9 @@ def method(name: str, spec: dict):
     detector = spec.pop("detector", "both")
     skip = spec.pop("frame_skip", compare.AUTO)
     measure = spec.pop("measure", "velocity")
-    configs = [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in spec.items()]
-    return compare.Ours(detector, label=name, measure=measure, configs=configs, frame_skip=skip)
+    return compare.Ours(
+        detector, label=name, measure=measure, configs=configs(spec), frame_skip=skip
+    )
 
 
 def _run(job: tuple) -> tuple[str, dict[str, Counts]]:
