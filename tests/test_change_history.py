@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
-from motiondetect.detection.objects import TrackConfig, trimmed
+from motiondetect.detection.objects import TrackConfig
+from motiondetect.detection.shaping import trimmed
 from motiondetect.measurement.image_change import (
     chained_difference,
     difference_noise,

@@ -51,8 +51,11 @@ def detect(tmp_path, source, *extra):
         ("davis/blackswan", "JPEGImages", 0.9, 0.48, 1.8),
         # A fast pan over motion-blurred grass: judged since the fit's confidence
         # counts what the image determines (0.92 / 0.46 / 0.33; before, 22 of 62
-        # frames had "too few inliers": 0.55 / 0.32 / 0.05).
-        ("davis/motocross-bumps", "JPEGImages", 0.85, 0.40, 0.6),
+        # frames had "too few inliers": 0.55 / 0.32 / 0.05). Outlining objects by
+        # the image change (TrackConfig.outline_px) gives 0.84 / 0.46 / 0.31: on
+        # five frames the followed rider is covered on 5-8 % of its pixels, not
+        # 16-24 %, where the wider band reached into it.
+        ("davis/motocross-bumps", "JPEGImages", 0.8, 0.40, 0.6),
         ("ucsd/birds", "in", 0.55, 0.08, 2.6),
         ("sbi/IBMtest2", "input", 0.9, 0.75, 0.5),
     ],

@@ -24,15 +24,15 @@ SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"
 
 #: sample -> (min object recall, min cell F1, max FA/frame); measured figures in comments.
 BOUNDS = {
-    "fixation_waving": (0.80, 0.62, 0.5),  # 0.84 / 0.66 / 0.41
-    "forward_crossing": (0.95, 0.90, 0.2),  # 1.00 / 0.94 / 0.14
-    "forwardyaw_waving": (0.83, 0.70, 0.15),  # 0.88 / 0.74 / 0.09
-    "handheld_emerging": (0.92, 0.88, 0.1),  # 0.96 / 0.92 / 0.03
-    "oblique_crossing": (0.95, 0.91, 0.4),  # 1.00 / 0.95 / 0.31
-    "pan_blindspot": (0.55, 0.60, 0.1),  # 0.60 / 0.65 / 0.05 (one mover is on its ray)
-    "static_walker": (0.95, 0.87, 0.1),  # 1.00 / 0.92 / 0.00
-    "uniform_mixed": (0.85, 0.88, 0.15),  # 0.90 / 0.93 / 0.09
-    "uniform_rigid": (None, None, 0.1),  # - / - / 0.09: no mover at all (issue 13's line)
+    "fixation_waving": (0.90, 0.68, 0.5),  # 0.95 / 0.72 / 0.38
+    "forward_crossing": (0.93, 0.94, 0.15),  # 0.96 / 0.97 / 0.07
+    "forwardyaw_waving": (0.85, 0.72, 0.1),  # 0.90 / 0.75 / 0.03
+    "handheld_emerging": (0.92, 0.93, 0.1),  # 0.94 / 0.96 / 0.00
+    "oblique_crossing": (0.95, 0.94, 0.1),  # 1.00 / 0.97 / 0.02
+    "pan_blindspot": (0.58, 0.66, 0.1),  # 0.61 / 0.69 / 0.02 (one mover is on its ray)
+    "static_walker": (0.95, 0.96, 0.1),  # 1.00 / 0.99 / 0.00
+    "uniform_mixed": (0.90, 0.92, 0.15),  # 0.94 / 0.95 / 0.09
+    "uniform_rigid": (None, None, 0.1),  # - / - / 0.05: no mover at all (issue 13's line)
 }
 
 
@@ -42,9 +42,12 @@ BOUNDS = {
 #: frame and the movers' scenes 1.98-3.48 (docs/egomotion.md); before the
 #: forward-backward check, 0.59, and forward_crossing 0.50.
 KNOWN_BOUNDS = {
-    "forward_crossing": (0.95, 0.90, 0.15),  # 0.98 / 0.944 / 0.07
-    "oblique_crossing": (0.95, 0.90, 0.15),  # 1.00 / 0.949 / 0.07
-    "uniform_rigid": (None, None, 0.1),  # - / - / 0.05: no mover at all
+    # The walker leaving the frame on the last two frames is covered on 6-8 % of
+    # its pixels once outlined by the image change (11-15 % with the wider
+    # gate's band), under object recall's 10 %: 0.94 against 1.00.
+    "forward_crossing": (0.92, 0.94, 0.1),  # 0.94 / 0.97 / 0.03
+    "oblique_crossing": (0.95, 0.94, 0.1),  # 1.00 / 0.96 / 0.02
+    "uniform_rigid": (None, None, 0.1),  # - / - / 0.02: no mover at all
 }
 
 

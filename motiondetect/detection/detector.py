@@ -35,6 +35,7 @@ from motiondetect.detection.objects import MovingObject, TrackConfig, group_obje
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.detection.rigid_depth import RigidDepth
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
+from motiondetect.detection.shaping import CHANGE_BOX
 from motiondetect.detection.streaming import F
 from motiondetect.detection.tracking import Tracker
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
@@ -44,7 +45,6 @@ from motiondetect.measurement.repeats import REPEAT
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
-_CHANGE_BOX = 3  # px averaged when testing an image change for object support
 
 
 def fuse(
@@ -329,13 +329,13 @@ class MotionDetector:
         track = self.tracker.config
         if track.support_sigmas <= 0 or fit.plane_difference is None:
             return None
-        changed = fit.image_changed(track.support_sigmas, _CHANGE_BOX)
+        changed = fit.image_changed(track.support_sigmas, CHANGE_BOX)
         if track.support_frames < 2 or fit.residual_px is None or not flagged.any():
             return changed
         slow = slow_parts(flagged, fit.residual_length(), track.support_frames, track.support_px)
         if not slow.any():
             return changed
-        longer = self._history.changed(track.support_sigmas, _CHANGE_BOX)
+        longer = self._history.changed(track.support_sigmas, CHANGE_BOX)
         return changed if longer is None else changed | (longer & slow)
 
     def _remembered(self, flow: VelocityField, fit: CameraFit, flagged: np.ndarray):
@@ -345,8 +345,8 @@ class MotionDetector:
         if self._background is None:
             return None
         sigmas = self.tracker.config.support_sigmas
-        differs = self._background.differs(flow, fit, sigmas, _CHANGE_BOX)
-        changed = None if fit.plane_difference is None else fit.image_changed(sigmas, _CHANGE_BOX)
+        differs = self._background.differs(flow, fit, sigmas, CHANGE_BOX)
+        changed = None if fit.plane_difference is None else fit.image_changed(sigmas, CHANGE_BOX)
         tracked = self.tracker.predicted_mask(flow.shape)  # a mover missed this frame
         self._background.learn(flagged if tracked is None else flagged | tracked, changed)
         return differs

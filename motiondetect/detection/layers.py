@@ -21,17 +21,13 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
-from motiondetect.detection.objects import MovingObject, filled
+from motiondetect.detection.objects import MovingObject
+from motiondetect.detection.shaping import MIN_KEPT, filled
 from motiondetect.measurement.dense_flow import VelocityField
 
 #: Side of the window the two prediction errors are averaged over, work px
 #: (about the flow's patch at the working size, like ``evidence_box``).
 ERROR_BOX = 5
-
-#: Smallest share of an object a cut may keep: a cut that would take more
-#: means the object's own velocity describes it poorly (a turning or
-#: deforming mover), not that the plane's layer reaches into it.
-MIN_KEPT = 0.5
 
 
 def plane_predicts_better(

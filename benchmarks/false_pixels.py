@@ -1,0 +1,113 @@
+r"""Where the flagged pixels that are not the mover lie.
+
+    python benchmarks/false_pixels.py davis
+    python benchmarks/false_pixels.py davis,ucsd '{"track": {"outline_px": 2}}'
+
+Pixel precision on DAVIS was about half: which half? Each flagged pixel
+outside the labelled mover falls in one of these classes, given as shares of
+all flagged pixels:
+
+- *apart*: in a flagged region that touches no labelled pixel (a false
+  alarm, or a mover the labels leave out);
+- *band 0-4*, *4-12*, *12-30*, *beyond 30*: in a region that touches the
+  mover, at that distance from it (input px, L2).
+
+A mask that is fat all round fills the near bands; a region joined to
+unlabelled motion (a second animal, water, smoke) fills *beyond 30*. Scores
+come from the default detector or from the config sections given as JSON
+(``sweep.configs``); unknown pixels (CDnet's 170) are left out, frames 0-1
+are not scored.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from multiprocessing import Pool
+
+import compare
+import cv2
+import numpy as np
+import sweep
+
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.video import open_source, read_mask
+from motiondetect.tools.evaluate import truth_masks
+
+#: Distance bands from the labelled mover, input px: (above, at most).
+BANDS = ((0, 4), (4, 12), (12, 30), (30, np.inf))
+COLUMNS = ("hit", "apart") + tuple(
+    f"band {a:g}-{b:g}" if np.isfinite(b) else f"beyond {a:g}" for a, b in BANDS
+)
+
+
+def false_pixels(flagged: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Pixel counts for one frame, in the order of ``COLUMNS``.
+
+    Parameters
+    ----------
+    flagged : (h, w) ndarray of bool
+    truth : (h, w) ndarray of uint8
+        A ground-truth mask (0 static, 255 moving, 170 unknown).
+    """
+    positive, unknown = truth_masks(truth)
+    _, labels = cv2.connectedComponents(flagged.view(np.uint8), connectivity=8)
+    touched = np.unique(labels[flagged & positive])
+    touching = np.isin(labels, touched[touched > 0])
+    false = flagged & ~positive & ~unknown
+    distance = cv2.distanceTransform((~positive).view(np.uint8), cv2.DIST_L2, 3)
+    near = false & touching
+    bands = [np.count_nonzero(near & (distance > a) & (distance <= b)) for a, b in BANDS]
+    hits = np.count_nonzero(flagged & positive)  # unknown pixels are not positive
+    return np.array([hits, np.count_nonzero(false & ~touching), *bands], np.int64)
+
+
+def _run(job: tuple) -> tuple[str, np.ndarray]:
+    name, source, gt, configs = job
+    cv2.setNumThreads(1)
+    masks = compare.gt_masks(gt)
+    detector = MotionDetector("both", *configs)
+    total = np.zeros(len(COLUMNS), np.int64)
+    with open_source(source) as frames:
+        for frame in frames:
+            result = detector.process(frame.image, frame.index, frame.time_s)
+            if frame.index < compare.WARMUP or frame.index not in masks:
+                continue
+            truth = read_mask(masks[frame.index])
+            h, w = truth.shape
+            total += false_pixels(result.input_mask(w, h) > 0, truth)
+    return name, total
+
+
+def _line(name: str, counts: np.ndarray) -> str:
+    shares = counts / max(int(counts.sum()), 1)
+    cells = "  ".join(f"{c} {s:.2f}" for c, s in zip(COLUMNS, shares))
+    return f"{name:30s} {cells}"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sbi,sample")
+    parser.add_argument("config", nargs="?", default="{}", help="JSON: config sections")
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    configs = sweep.configs(json.loads(args.config))
+    groups = args.datasets.split(",")
+    jobs = [
+        (name, source, gt, configs)
+        for name, source, gt, _ in compare.sequences(quick=False)
+        if gt is not None and gt.suffix != ".txt" and any(name.startswith(g) for g in groups)
+    ]
+    with Pool(args.jobs) as pool:
+        results = pool.map(_run, jobs, chunksize=1)
+    for group in groups:
+        rows = [r for r in results if r[0].startswith(group)]
+        for name, counts in rows:
+            print("  " + _line(name, counts))
+        print(_line(group, sum((r[1] for r in rows), np.zeros(len(COLUMNS), np.int64))))
+
+
+if __name__ == "__main__":
+    main()
