@@ -22,6 +22,7 @@ import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
 from motiondetect.detection.objects import MovingObject
+from motiondetect.detection.regions import components_with_stats
 from motiondetect.detection.shaping import MIN_KEPT, filled
 from motiondetect.measurement.dense_flow import VelocityField
 
@@ -89,7 +90,7 @@ def assigned(
     if not background.any():
         return obj
     kept = (own & ~background).view(np.uint8)
-    _, labels, stats, _ = cv2.connectedComponentsWithStats(kept, connectivity=8)
+    _, labels, stats = components_with_stats(kept)
     parts = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area) + 1
     if len(parts) != 1:
         return obj

@@ -10,6 +10,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motiondetect.detection.regions import components_with_stats
+
 #: Side of the window an image change is averaged over when it supports an
 #: object, work px.
 CHANGE_BOX = 3
@@ -54,12 +56,17 @@ def outlined(own: np.ndarray, near: np.ndarray, close: np.ndarray | None) -> np.
         cut went through the mover, not round it).
     """
     kept = own & near
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(kept, connectivity=8)
+    size, cut = int(cv2.countNonZero(own)), int(cv2.countNonZero(kept))
+    if cut == size or cut < MIN_KEPT * size:  # nothing to cut, or too much
+        return own
+    count, labels, stats = components_with_stats(kept)
     crumbs = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] < CHANGE_BOX**2) + 1
     if len(crumbs):
         kept[np.isin(labels, crumbs)] = 0
-    if kept.sum() < MIN_KEPT * own.sum() or _parts(kept, close) > _parts(own, close):
-        return own
+        if cv2.countNonZero(kept) < MIN_KEPT * size:
+            return own
+    if count - 1 - len(crumbs) > 1 and _parts(kept, close) > _parts(own, close):
+        return own  # (one part stays one part when closed: no need to look)
     return kept
 
 
@@ -68,7 +75,7 @@ def _parts(mask: np.ndarray, close: np.ndarray | None) -> int:
     (smaller than ``CHANGE_BOX`` squared) not counted."""
     if close is not None:
         mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, close)
-    _, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    _, _, stats = components_with_stats(mask)
     return int(np.count_nonzero(stats[1:, cv2.CC_STAT_AREA] >= CHANGE_BOX**2))
 
 
@@ -124,7 +131,7 @@ def trimmed(
     cut = own & kept
     if close is not None:
         cut = cv2.morphologyEx(cut, cv2.MORPH_CLOSE, close)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(cut, connectivity=8)
+    count, labels, stats = components_with_stats(cut)
     if count < 2:
         return own
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
