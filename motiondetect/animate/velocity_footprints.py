@@ -37,7 +37,11 @@ from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.detection.base import DetectorOutput
-from motiondetect.detection.regions import hysteresis, without_frame_edge
+from motiondetect.detection.regions import (
+    components_with_stats,
+    hysteresis,
+    without_frame_edge,
+)
 from motiondetect.measurement.dense_flow import VelocityField
 
 NAME = "velocity-animate"
@@ -213,12 +217,32 @@ def coherent_growth(
     """
     moving = speed > tolerance
     seeds = seeds & moving
+    out = np.zeros(seeds.shape, bool)
     if not seeds.any():
-        return np.zeros(seeds.shape, bool)
+        return out
+    # Only the moving regions that hold a seed can grow: work in their box.
+    _, regions, boxes = components_with_stats(moving)
+    held = np.unique(regions[seeds])
+    x0, y0 = boxes[held, 0].min(), boxes[held, 1].min()
+    x1 = (boxes[held, 0] + boxes[held, 2]).max()
+    y1 = (boxes[held, 1] + boxes[held, 3]).max()
+    box = np.s_[y0:y1, x0:x1]
+    keep = np.zeros(len(boxes), bool)
+    keep[held] = True
+    out[box] = _grown(seeds[box], residual[box], keep[regions[box]], tolerance, relative)
+    return out
+
+
+def _grown(
+    seeds: np.ndarray, residual: np.ndarray, moving: np.ndarray, tolerance: float,
+    relative: float,
+) -> np.ndarray:  # fmt: skip
+    """:func:`coherent_growth` within the box of the moving regions."""
     count, parts = cv2.connectedComponents(seeds.view(np.uint8), connectivity=8)
     ids = parts[seeds]  # the part of each seed pixel, in scan order
     sizes = np.bincount(ids, minlength=count).clip(1)
-    v = np.stack([np.bincount(ids, residual[seeds][:, k], count) / sizes for k in (0, 1)], 1)
+    at_seeds = residual[seeds]
+    v = np.stack([np.bincount(ids, at_seeds[:, k], count) / sizes for k in (0, 1)], 1)
     reach = np.maximum(tolerance, relative * np.hypot(v[:, 0], v[:, 1]))
     if count == 2:  # one part
         part = np.ones(seeds.shape, np.intp)
@@ -227,8 +251,8 @@ def coherent_growth(
             (~seeds).view(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
         )
         part = ids[nearest - 1]
-    gap = np.hypot(residual[..., 0] - v[part, 0], residual[..., 1] - v[part, 1])
-    grown = (moving & (gap < reach[part])) | seeds
+    dx, dy = residual[..., 0] - v[part, 0], residual[..., 1] - v[part, 1]
+    grown = (moving & (dx * dx + dy * dy < (reach * reach)[part])) | seeds
     _, pieces = cv2.connectedComponents(grown.view(np.uint8), connectivity=8)
     touched = np.unique(pieces[seeds])
     return np.isin(pieces, touched[touched > 0])
