@@ -21,10 +21,6 @@ are not scored.
 
 from __future__ import annotations
 
-import argparse
-import json
-from multiprocessing import Pool
-
 import compare
 import cv2
 import numpy as np
@@ -86,22 +82,7 @@ def _line(name: str, counts: np.ndarray) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sbi,sample")
-    parser.add_argument("config", nargs="?", default="{}", help="JSON: config sections")
-    parser.add_argument("--jobs", type=int, default=2)
-    args = parser.parse_args()
-    configs = sweep.configs(json.loads(args.config))
-    groups = args.datasets.split(",")
-    jobs = [
-        (name, source, gt, configs)
-        for name, source, gt, _ in compare.sequences(quick=False)
-        if gt is not None and gt.suffix != ".txt" and any(name.startswith(g) for g in groups)
-    ]
-    with Pool(args.jobs) as pool:
-        results = pool.map(_run, jobs, chunksize=1)
+    groups, results = sweep.on_masked_sequences(__doc__, _run)
     for group in groups:
         rows = [r for r in results if r[0].startswith(group)]
         for name, counts in rows:

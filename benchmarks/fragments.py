@@ -15,10 +15,6 @@ counted: OTB has one box per frame, and the fox clip has no mover.
 
 from __future__ import annotations
 
-import argparse
-import json
-from multiprocessing import Pool
-
 import compare
 import cv2
 import numpy as np
@@ -70,23 +66,7 @@ def _run(job: tuple) -> tuple[str, int, int]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sbi,sample")
-    parser.add_argument("config", nargs="?", default="{}", help="JSON: config sections")
-    parser.add_argument("--jobs", type=int, default=2)
-    args = parser.parse_args()
-    spec = json.loads(args.config)
-    configs = sweep.configs(spec)
-    groups = args.datasets.split(",")
-    jobs = [
-        (name, source, gt, configs)
-        for name, source, gt, _ in compare.sequences(quick=False)
-        if gt is not None and gt.suffix != ".txt" and any(name.startswith(g) for g in groups)
-    ]
-    with Pool(args.jobs) as pool:
-        results = pool.map(_run, jobs, chunksize=1)
+    groups, results = sweep.on_masked_sequences(__doc__, _run)
     for group in groups:
         rows = [r for r in results if r[0].startswith(group)]
         for name, boxed, split in rows:

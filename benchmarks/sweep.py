@@ -43,6 +43,30 @@ def configs(sections: dict) -> list:
     return [dataclasses.replace(SECTIONS[k](), **fields) for k, fields in sections.items()]
 
 
+def on_masked_sequences(description: str, run) -> tuple[list[str], list]:
+    """The command line ``datasets [config] [--jobs N]`` of the per-mask
+    benchmarks (``fragments.py``, ``false_pixels.py``): ``run((name, source,
+    truth folder, configs))`` on every sequence of those data sets with mask
+    ground truth (OTB's boxes and the fox have none), in a pool. Returns the
+    data sets asked for and the results, in sequence order."""
+    parser = argparse.ArgumentParser(
+        description=description, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sbi,sample")
+    parser.add_argument("config", nargs="?", default="{}", help="JSON: config sections")
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    sections = configs(json.loads(args.config))
+    groups = args.datasets.split(",")
+    jobs = [
+        (name, source, gt, sections)
+        for name, source, gt, _ in compare.sequences(quick=False)
+        if gt is not None and gt.suffix != ".txt" and any(name.startswith(g) for g in groups)
+    ]
+    with Pool(args.jobs) as pool:
+        return groups, pool.map(run, jobs, chunksize=1)
+
+
 def method(name: str, spec: dict):
     """One variant as a per-frame method of ``compare.run_sequence``, named ``name``."""
     spec = dict(spec)

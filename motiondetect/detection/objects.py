@@ -61,12 +61,13 @@ class TrackConfig:
         Reach of the image change that draws each object's outline once it
         is grouped, work px (at most ``support_px``; equal: off). The reach
         that joins a mover also widens it by that much wherever the flow
-        smears its velocity into the background, a band all round it. A cut
-        that keeps less than ``shaping.MIN_KEPT`` of the object, or that leaves it in
-        more parts once closed, is not taken (:func:`.shaping.outlined`). 1 raises
-        cell F1 on every data set at equal or fewer false alarms (DAVIS
-        0.645 to 0.651, UCSD 0.228 to 0.244; 0 gains more on DAVIS but loses
-        object recall on the renders; docs/detectors.md).
+        smears its velocity into the background, a band all round it. A
+        cut that keeps less than ``shaping.MIN_KEPT`` of the object, or that
+        leaves it in more parts once closed, is not taken
+        (:func:`.shaping.outlined`). 1 raises cell F1 on every data set at
+        equal or fewer false alarms (DAVIS 0.645 to 0.651, UCSD 0.228 to
+        0.244; 0 gains more on DAVIS but loses object recall on the renders;
+        docs/detectors.md).
     support_frames : int
         Slow movers: for flagged parts whose mean residual speed moves them
         at most ``support_px`` over ``support_frames - 1`` frames, the image
