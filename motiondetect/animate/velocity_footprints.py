@@ -244,9 +244,8 @@ def _grown(
     at_seeds = residual[seeds]
     v = np.stack([np.bincount(ids, at_seeds[:, k], count) / sizes for k in (0, 1)], 1)
     reach = np.maximum(tolerance, relative * np.hypot(v[:, 0], v[:, 1]))
-    if count == 2:  # one part
-        part = np.ones(seeds.shape, np.intp)
-    else:  # each pixel against the part nearest to it, in one pass
+    part = 1  # one part: every pixel against it
+    if count > 2:  # each pixel against the part nearest to it, in one pass
         _, nearest = cv2.distanceTransformWithLabels(
             (~seeds).view(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
         )
