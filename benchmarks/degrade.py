@@ -28,6 +28,10 @@ region is a false alarm) are written into ``OUT`` with
   the height, under a curved edge, shows the same textured, darkened image
   on every frame (the clip's first frame, mirrored); the ground truth marks
   it static;
+* ``--shake P``: a handheld camera shaken during the exposure: each frame,
+  with probability ``P``, smeared along a line of a random direction and a
+  length of 2-6 % of the width (a 1/30 s shutter on a jolt); the ground
+  truth is unchanged (heavy blur: the frames the tool may call unreliable);
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -131,16 +135,31 @@ def hooded(image: np.ndarray, part: np.ndarray, share: float) -> np.ndarray:
 def degraded(
     image: np.ndarray, t: int, noise: float, exposure: float, rng, distortion: float = 0.0,
     overlay: bool = False, letterbox: float = 0.0, pillarbox: float = 0.0,
-    blurred: bool = False,
+    blurred: bool = False, smear: tuple[float, float] | None = None,
 ) -> np.ndarray:  # fmt: skip
-    """Frame ``t`` (uint8) through the lens, with the exposure drift and the
-    sensor noise applied, the bars added and the caption burnt in last."""
+    """Frame ``t`` (uint8) through the lens, smeared by ``smear`` (length px,
+    direction rad; :func:`smeared`), with the exposure drift and the sensor
+    noise applied, the bars added and the caption burnt in last."""
     gain = np.float32(1.0 + exposure * np.sin(2 * np.pi * t / 30))
-    out = _lens(image, distortion).astype(np.float32) * gain
+    out = _lens(image, distortion)
+    if smear is not None:
+        out = smeared(out, *smear)
+    out = out.astype(np.float32) * gain
     if noise > 0:
         out += rng.normal(0.0, noise, image.shape).astype(np.float32)
     out = bars(np.clip(np.rint(out), 0, 255).astype(np.uint8), letterbox, pillarbox, blurred)
     return caption(out, t) if overlay else out
+
+
+def smeared(image: np.ndarray, length: float, angle: float) -> np.ndarray:
+    """``image`` averaged along a line ``length`` px long at ``angle`` (rad):
+    the motion blur of a camera turned by that much during the exposure."""
+    size = int(np.ceil(length)) | 1
+    kernel = np.zeros((size, size), np.float32)
+    c, r = size // 2, length / 2
+    dx, dy = r * np.cos(angle), r * np.sin(angle)
+    cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1)
+    return cv2.filter2D(image, -1, kernel / kernel.sum())
 
 
 def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: int) -> None:
@@ -151,9 +170,13 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
         image = cv2.imread(str(path))
         if t == 0:
             part = dashboard(image)
+        smear = None
+        if args.shake > 0 and rng.random() < args.shake:
+            smear = (rng.uniform(0.02, 0.06) * image.shape[1], rng.uniform(0, np.pi))
         image = degraded(
             hooded(image, part, args.hood), t, args.noise, args.exposure, rng,
             args.distortion, args.overlay, args.letterbox, args.pillarbox, args.blurred_sides,
+            smear,
         )  # fmt: skip
         cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
@@ -189,11 +212,14 @@ def main() -> None:
     parser.add_argument("--pillarbox", type=float, default=0.0, help="bar width, 0-0.5")
     parser.add_argument("--blurred-sides", action="store_true", help="fill the side bars")
     parser.add_argument("--hood", type=float, default=0.0, help="camera-fixed share, 0-0.5")
+    parser.add_argument("--shake", type=float, default=0.0, help="share of frames smeared, 0-1")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
         parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")
     if not (0 <= args.letterbox <= 0.5 and 0 <= args.pillarbox <= 0.5 and 0 <= args.hood <= 0.5):
         parser.error("--letterbox, --pillarbox and --hood must be in [0, 0.5]")
+    if not 0 <= args.shake <= 1:
+        parser.error("--shake must be in [0, 1]")
     clips = [(im, truth, args.out / group / im.parent.name) for im, truth, group in moving_clips()]
     fox = SHARED_DATA / "fox"
     if (fox / "images").is_dir():

@@ -311,7 +311,7 @@ class _Bars:
 
 def _unreliable(counts: dict) -> str:
     """The summary line's tail naming the frames that could not be judged,
-    such as ``; 6 frames unreliable (2 cut, 4 heavy blur)``; empty when none."""
+    such as ``; 6 frames unreliable (2 cut, 4 motion beyond the band)``; empty when none."""
     if not counts:
         return ""
     reasons = ", ".join(f"{n} {reason}" for reason, n in counts.items())

@@ -10,6 +10,8 @@ pasted as movers (``velocity_scenes.py``), so every answer is known.
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 import pytest
@@ -189,19 +191,57 @@ def test_image_changed_finds_a_change_and_ignores_noise():
     assert changed[outside].mean() < 0.002
 
 
-def test_heavily_blurred_frames_are_marked_unreliable():
-    """A fast turn smears the picture: those frames say they cannot be judged."""
+def _smeared(image: np.ndarray, length: int, angle: float) -> np.ndarray:
+    """``image`` averaged along a line ``length`` px long: a camera jolted
+    during the exposure."""
+    kernel = np.zeros((length | 1,) * 2, np.float32)
+    c, dx, dy = length // 2, length / 2 * np.cos(angle), length / 2 * np.sin(angle)
+    cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1)
+    return cv2.filter2D(image, -1, kernel / kernel.sum())
+
+
+def _jolted_pan() -> tuple[list, set[int]]:
+    """A pan with a smooth mover whose frames 9 and 10 are smeared by 5 % of
+    the width, and those frames' numbers."""
     from .scenes import scene
 
-    frames = [fr.image for fr in scene("pan", ("smooth",), frames=14)]
-    blurred = {9, 10}
-    for i in blurred:
-        frames[i] = cv2.GaussianBlur(frames[i], (0, 0), 4.0)
-    md = MotionDetector("both")
-    reasons = [md.process(f, i, i / 30).reason for i, f in enumerate(frames)]
-    assert [i for i, r in enumerate(reasons) if r == "heavy blur"] == sorted(blurred)
-    off = MotionDetector("both", FitConfig(blur_ratio=0.0))
-    assert all(off.process(f, i, i / 30).reason != "heavy blur" for i, f in enumerate(frames))
+    frames = list(scene("pan", ("smooth",), frames=14))
+    jolted = {9, 10}
+    for i in jolted:
+        image = frames[i].image
+        frames[i] = dataclasses.replace(frames[i], image=_smeared(image, image.shape[1] // 20, 0.3))
+    return frames, jolted
+
+
+def test_a_smeared_frame_is_judged_and_its_mover_found():
+    """A jolt smears the picture, not the motion: the flow still measures the
+    pan and the mover, so the smeared frames are judged like the others
+    (``blur_ratio`` 0, the default), and the mover is covered on them with
+    nothing flagged apart from it. Measured: 1.00 and 0.96 of it covered."""
+    frames, jolted = _jolted_pan()
+    detector = MotionDetector("both")
+    for frame in frames:
+        result = detector.process(frame.image, frame.index, frame.index / 30)
+        if frame.index not in jolted:
+            continue
+        assert result.reliable
+        h, w = frame.mask.shape
+        flagged, mover = result.input_mask(w, h) > 0, frame.mask > 0
+        assert np.count_nonzero(flagged & mover) >= 0.9 * np.count_nonzero(mover)
+        _, parts = cv2.connectedComponents(flagged.view(np.uint8))
+        assert set(np.unique(parts[flagged])) <= set(np.unique(parts[flagged & mover]))
+
+
+def test_heavily_blurred_frames_can_be_marked_unreliable():
+    """With ``blur_ratio`` set, a frame whose sharpness falls below that share
+    of its recent median says it cannot be judged."""
+    frames, jolted = _jolted_pan()
+    md = MotionDetector("both", FitConfig(blur_ratio=1 / 3))
+    reasons = [md.process(f.image, f.index, f.index / 30).reason for f in frames]
+    assert [i for i, r in enumerate(reasons) if r == "heavy blur"] == sorted(jolted)
+    default = MotionDetector("both")
+    reasons = [default.process(f.image, f.index, f.index / 30).reason for f in frames]
+    assert "heavy blur" not in reasons
 
 
 @pytest.mark.parametrize(
