@@ -11,9 +11,12 @@ def check_fields(
     *,
     positive: Iterable[str] = (),
     non_negative: Iterable[str] = (),
+    shares: Iterable[str] = (),
     choices: Mapping[str, tuple] | None = None,
 ) -> None:
-    """Raise ``ValueError`` naming the first field out of its range.
+    """Raise ``ValueError`` naming the first field out of its range:
+    ``positive`` above 0, ``non_negative`` at least 0, ``shares`` in [0, 1]
+    (a share, an overlap, a rate).
 
     NaN fails every numeric check (``nan > 0`` is false), and so does a
     value that is not a number at all.
@@ -22,6 +25,8 @@ def check_fields(
         _number(config, name, lambda v: v > 0, "be positive")
     for name in non_negative:
         _number(config, name, lambda v: v >= 0, "not be negative")
+    for name in shares:
+        _number(config, name, lambda v: 0 <= v <= 1, "be in [0, 1]")
     for name, allowed in (choices or {}).items():
         value = getattr(config, name)
         if value not in allowed:

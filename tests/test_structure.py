@@ -137,6 +137,23 @@ def test_command_line_and_config_file_refuse_alike(tmp_path, toml, option, messa
         assert result.exit_code == 2 and message in result.output, result.output
 
 
+@pytest.mark.parametrize(
+    ("section", "line"),
+    [("track", "min_iou = 2"), ("track", "trim_share = 1.5"), ("fit", "blur_ratio = 3")],
+)
+def test_a_share_beyond_one_is_refused(tmp_path, section, line):
+    """An overlap or a share above 1 can never be met: refused with one line,
+    not run to an empty result (``min_iou = 2`` once gave 0 detections)."""
+    (tmp_path / "c.toml").write_text(f"[{section}]\n{line}\n")
+    name = line.split(" =")[0]
+    with pytest.raises(SettingsError, match=rf"{name} must be in \[0, 1\]"):
+        make_settings(load_config_file(tmp_path / "c.toml"))
+    clip = ROOT / "sample_videos" / "uniform_rigid" / "video.mp4"
+    args = ["detect", str(clip), "-o", str(tmp_path / "o"), "--config", str(tmp_path / "c.toml")]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 2 and f"{name} must be in [0, 1]" in result.output
+
+
 def test_wrong_types_in_the_config_file_get_one_line(tmp_path):
     (tmp_path / "c.toml").write_text('work_size = "big"\n[track]\ngap_px = "wide"\n')
     with pytest.raises(SettingsError, match="--work-size must be a whole number"):

@@ -123,12 +123,11 @@ class FitConfig:
                 "min_inlier_share",
                 "tight_px",
                 "min_parallax_blocks",
-                "max_flagged_share",
-                "blur_ratio",
                 "aperture_noise",
                 "edge_px",
                 "focal_share",
             ),
+            shares=("max_flagged_share", "blur_ratio"),
         )
         if self.min_inlier_share >= 1:
             raise ValueError(f"min_inlier_share must be below 1, got {self.min_inlier_share}")

@@ -152,27 +152,20 @@ class TrackConfig:
             positive=("persistence",),
             non_negative=(
                 "gap_px",
-                "min_area_share",
                 "max_missed",
                 "hold_frames",
                 "hold_age",
-                "min_iou",
                 "support_sigmas",
                 "support_px",
                 "outline_px",
                 "support_frames",
                 "close_px",
-                "background_rate",
                 "background_frames",
-                "trim_share",
                 "layer_sigmas",
-                "rigid_share",
                 "overlay_frames",
             ),
+            shares=("min_area_share", "min_iou", "background_rate", "trim_share", "rigid_share"),
         )
-        for name in ("background_rate", "trim_share", "rigid_share"):
-            if getattr(self, name) > 1:
-                raise ValueError(f"{name} must be at most 1, but got {getattr(self, name)}")
         if self.outline_px > self.support_px:
             raise ValueError(
                 f"outline_px must be at most support_px ({self.support_px}),"
