@@ -51,6 +51,8 @@ import numpy as np
 from common import SHARED_DATA
 from subsample import moving_clips, numbered
 
+from motiondetect.tools.synth import smeared
+
 
 @functools.lru_cache(maxsize=4)
 def barrel_maps(width: int, height: int, k: float) -> tuple[np.ndarray, np.ndarray]:
@@ -138,8 +140,9 @@ def degraded(
     blurred: bool = False, smear: tuple[float, float] | None = None,
 ) -> np.ndarray:  # fmt: skip
     """Frame ``t`` (uint8) through the lens, smeared by ``smear`` (length px,
-    direction rad; :func:`smeared`), with the exposure drift and the sensor
-    noise applied, the bars added and the caption burnt in last."""
+    direction rad; :func:`~motiondetect.tools.synth.smeared`), with the
+    exposure drift and the sensor noise applied, the bars added and the
+    caption burnt in last."""
     gain = np.float32(1.0 + exposure * np.sin(2 * np.pi * t / 30))
     out = _lens(image, distortion)
     if smear is not None:
@@ -149,17 +152,6 @@ def degraded(
         out += rng.normal(0.0, noise, image.shape).astype(np.float32)
     out = bars(np.clip(np.rint(out), 0, 255).astype(np.uint8), letterbox, pillarbox, blurred)
     return caption(out, t) if overlay else out
-
-
-def smeared(image: np.ndarray, length: float, angle: float) -> np.ndarray:
-    """``image`` averaged along a line ``length`` px long at ``angle`` (rad):
-    the motion blur of a camera turned by that much during the exposure."""
-    size = int(np.ceil(length)) | 1
-    kernel = np.zeros((size, size), np.float32)
-    c, r = size // 2, length / 2
-    dx, dy = r * np.cos(angle), r * np.sin(angle)
-    cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1)
-    return cv2.filter2D(image, -1, kernel / kernel.sum())
 
 
 def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: int) -> None:

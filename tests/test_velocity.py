@@ -28,6 +28,7 @@ from motiondetect.constraint_ray.plane import (
 from motiondetect.constraint_ray.velocity_filter import gap_to_segment
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, vector_length
+from motiondetect.tools.synth import smeared
 
 from .velocity_scenes import H, W, background, field_between
 
@@ -191,15 +192,6 @@ def test_image_changed_finds_a_change_and_ignores_noise():
     assert changed[outside].mean() < 0.002
 
 
-def _smeared(image: np.ndarray, length: int, angle: float) -> np.ndarray:
-    """``image`` averaged along a line ``length`` px long: a camera jolted
-    during the exposure."""
-    kernel = np.zeros((length | 1,) * 2, np.float32)
-    c, dx, dy = length // 2, length / 2 * np.cos(angle), length / 2 * np.sin(angle)
-    cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1)
-    return cv2.filter2D(image, -1, kernel / kernel.sum())
-
-
 def _jolted_pan() -> tuple[list, set[int]]:
     """A pan with a smooth mover whose frames 9 and 10 are smeared by 5 % of
     the width, and those frames' numbers."""
@@ -209,7 +201,7 @@ def _jolted_pan() -> tuple[list, set[int]]:
     jolted = {9, 10}
     for i in jolted:
         image = frames[i].image
-        frames[i] = dataclasses.replace(frames[i], image=_smeared(image, image.shape[1] // 20, 0.3))
+        frames[i] = dataclasses.replace(frames[i], image=smeared(image, image.shape[1] // 20, 0.3))
     return frames, jolted
 
 

@@ -82,7 +82,7 @@ class CameraFit:
         :func:`difference_noise` of ``plane_difference``, grey levels
         (measured once per frame; None: measured when first needed).
     sharpness : float
-        :func:`sharpness` of this frame.
+        :func:`sharpness` of this frame (0 while the blur test is off).
     aperture_energy : float
         Gradient energy a velocity component needs to count half in
         :meth:`determined_beyond`, grey levels^2/px^2 (0: every component
@@ -261,7 +261,7 @@ def fit_camera(
         energy = (config.aperture_noise * change_noise) ** 2
         share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
     cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
-    sharp = sharpness(field.grey)
+    sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0  # the blur test is off
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
     reason = _reason(homography, share, speed, cut, blurred, config)
     edge = config.edge_px + speed

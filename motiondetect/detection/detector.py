@@ -265,7 +265,8 @@ class MotionDetector:
             self._picture = flow.picture
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         fit = fit_camera(flow, self.fit_config, self._epipole, reference)
-        self._sharpness.append(fit.sharpness)
+        if self.fit_config.blur_ratio > 0:  # the blur test's reference
+            self._sharpness.append(fit.sharpness)
         self._epipole = fit.epipole
         tracked = self.tracker.predicted_mask(flow.shape) if self.tracker.config.prior else None
         flow = flow.judged(fit, tracked, self._interval(time_s))

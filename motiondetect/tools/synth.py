@@ -228,6 +228,29 @@ def render_frames(config: SynthConfig) -> Iterator[Frame]:
         yield Frame(t, image, mask, ids, pose, visible, nearest)
 
 
+def smeared(image: np.ndarray, length: float, angle: float) -> np.ndarray:
+    """A frame as a camera jolted during its exposure records it.
+
+    Parameters
+    ----------
+    image : (H, W) or (H, W, C) ndarray of uint8
+    length : float
+        Length of the smear, px.
+    angle : float
+        Its direction, radians from the x axis.
+
+    Returns
+    -------
+    ndarray of uint8, the shape of ``image``: averaged along that line.
+    """
+    size = int(np.ceil(length)) | 1
+    kernel = np.zeros((size, size), np.float32)
+    c, r = size // 2, length / 2
+    dx, dy = r * np.cos(angle), r * np.sin(angle)
+    cv2.line(kernel, (round(c - dx), round(c - dy)), (round(c + dx), round(c + dy)), 1.0, 1)
+    return cv2.filter2D(image, -1, kernel / kernel.sum())
+
+
 def write_sequence(config: SynthConfig, out_dir, *, video_name: str = "video.mp4") -> dict:
     """Render ``config`` to ``out_dir``: video, ``truth/`` masks and ``scene.json``.
 
