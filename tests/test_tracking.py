@@ -54,6 +54,36 @@ def test_a_cut_ends_every_track():
     assert len(after) == 1 and after.isdisjoint(before)
 
 
+def _box(x0: float, x1: float) -> MovingObject:
+    return MovingObject(np.zeros((10, 10), bool), (x0, 10.0, x1, 40.0), (0.0, 0.0))
+
+
+def test_an_established_track_keeps_its_id_when_a_young_one_joins_it():
+    """When a young track (a part found beside a mover: a head, a swinging
+    limb) joins the mover's, the joined object keeps the id the mover has
+    had for frames, though it overlaps the part's box more (tracks choose
+    in order of age, as where the objects are merged)."""
+    tracker = Tracker(TrackConfig(persistence=2, min_iou=0.2))
+    for _ in range(4):
+        tracker.update([_box(0.0, 40.0)])
+    for _ in range(2):
+        beside = tracker.update([_box(0.0, 40.0), _box(38.0, 60.0)])
+    assert [o.track for o in beside] == [1, 2]
+    # IoU 0.24 with track 1's box, 0.59 with track 2's
+    assert [o.track for o in tracker.update([_box(25.0, 62.0)])] == [1]
+
+
+def test_a_part_split_from_a_confirmed_track_is_reported_at_once():
+    """A part that leaves a confirmed mover has been seen within it: its new
+    track is reported on the frame it starts, while a new object elsewhere
+    still waits ``persistence`` frames."""
+    tracker = Tracker(TrackConfig(persistence=3, min_iou=0.2))
+    for _ in range(3):
+        tracker.update([_box(0.0, 40.0)])
+    found = tracker.update([_box(0.0, 30.0), _box(25.0, 40.0), _box(200.0, 240.0)])
+    assert [o.track for o in found] == [1, 2]  # the part at 200 px is new
+
+
 def test_a_missed_track_is_predicted_as_far_as_it_moved_meanwhile():
     """A mover missed for a few frames is looked for where its velocity has
     carried it since it was last seen, not one frame's motion ahead."""

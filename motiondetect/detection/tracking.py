@@ -1,8 +1,10 @@
 """Objects kept across frames: stable ids, persistence and held tracks.
 
-1. **Track.** Each object is matched to the track whose box, moved by the
-   track's own image velocity (which includes the camera's motion), it
-   overlaps most. Tracks keep a stable integer id.
+1. **Track.** Tracks choose objects in order of age: each takes the free
+   object that overlaps most its box moved on by the track's own image
+   velocity (which includes the camera's motion). Tracks keep a stable
+   integer id; a part split from a confirmed track starts one that is
+   confirmed at once.
 2. **Persist.** An object is reported once its track has been seen on
    ``persistence`` frames; a track survives ``max_missed`` frames unseen,
    frames that cannot be judged included, but not a cut: the shot after it
@@ -87,29 +89,56 @@ class Tracker:
             mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
         return mask
 
-    def _match(self, obj: MovingObject, candidates: list[int]) -> int | None:
-        """The index among ``candidates`` of the track ``obj`` continues: the
-        one whose predicted box it overlaps most, at least ``min_iou``."""
-        best, best_iou = None, self.config.min_iou
-        for i in candidates:
-            iou = box_iou(self._tracks[i].predicted(), obj.box)
-            if iou >= best_iou:
-                best, best_iou = i, iou
-        return best
+    def _assign(self, objects: list[MovingObject]) -> list[int | None]:
+        """For each object, the index of the track it continues, or None.
+
+        Established tracks choose first: in order of age (then of frames
+        missed), each track takes the free object whose box overlaps its
+        predicted box most, at least ``min_iou``. Where a mover's parts
+        part and rejoin, a young track made of one part then cannot take
+        the whole mover's id from the track that has followed it for long.
+        """
+        owner: list[int | None] = [None] * len(objects)
+        order = sorted(
+            range(len(self._tracks)), key=lambda i: (-self._tracks[i].age, self._tracks[i].missed)
+        )
+        for i in order:
+            predicted = self._tracks[i].predicted()
+            best, best_iou = None, self.config.min_iou
+            for j, obj in enumerate(objects):
+                if owner[j] is None:
+                    iou = box_iou(predicted, obj.box)
+                    if iou >= best_iou:
+                        best, best_iou = j, iou
+            if best is not None:
+                owner[best] = i
+        return owner
+
+    def _born_age(self, obj: MovingObject) -> int:
+        """Age of the track a new object starts: 1, or ``persistence`` when
+        it is a part split from a confirmed track (its box overlaps the
+        track's predicted box by ``min_iou``, and another part continues the
+        track). Such a part has been seen, within the whole, so it is
+        reported at once."""
+        cfg = self.config
+        for track in self._tracks:
+            if track.age >= cfg.persistence and box_iou(track.predicted(), obj.box) >= cfg.min_iou:
+                return cfg.persistence
+        return 1
 
     def update(self, objects: list[MovingObject]) -> list[MovingObject]:
         """Match this frame's objects to tracks; return the confirmed ones with ids."""
         cfg = self.config
-        free = list(range(len(self._tracks)))
+        owners = self._assign(objects)
+        born = [self._born_age(o) if i is None else 0 for o, i in zip(objects, owners)]
+        free = [i for i in range(len(self._tracks)) if i not in owners]
         confirmed = []
-        for obj in objects:
-            best = self._match(obj, free)
+        for obj, best, age in zip(objects, owners, born):
             if best is None:
-                track = _Track(self._next_id, obj.box, obj.velocity_px)
+                track = _Track(self._next_id, obj.box, obj.velocity_px, age)
                 self._next_id += 1
                 self._tracks.append(track)
             else:
-                free.remove(best)
                 track = self._tracks[best]
                 track.box, track.velocity = obj.box, obj.velocity_px
                 track.age, track.missed = track.age + 1, 0
