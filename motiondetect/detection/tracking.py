@@ -89,12 +89,12 @@ class Tracker:
             mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
         return mask
 
-    def _assign(self, objects: list[MovingObject]) -> list[int | None]:
+    def _assign(self, objects: list[MovingObject], predicted: list[tuple]) -> list[int | None]:
         """For each object, the index of the track it continues, or None.
 
         Established tracks choose first: in order of age (then of frames
         missed), each track takes the free object whose box overlaps its
-        predicted box most, at least ``min_iou``. Where a mover's parts
+        ``predicted`` box most, at least ``min_iou``. Where a mover's parts
         part and rejoin, a young track made of one part then cannot take
         the whole mover's id from the track that has followed it for long.
         """
@@ -103,34 +103,34 @@ class Tracker:
             range(len(self._tracks)), key=lambda i: (-self._tracks[i].age, self._tracks[i].missed)
         )
         for i in order:
-            predicted = self._tracks[i].predicted()
             best, best_iou = None, self.config.min_iou
             for j, obj in enumerate(objects):
                 if owner[j] is None:
-                    iou = box_iou(predicted, obj.box)
+                    iou = box_iou(predicted[i], obj.box)
                     if iou >= best_iou:
                         best, best_iou = j, iou
             if best is not None:
                 owner[best] = i
         return owner
 
-    def _born_age(self, obj: MovingObject) -> int:
+    def _born_age(self, obj: MovingObject, predicted: list[tuple]) -> int:
         """Age of the track a new object starts: 1, or ``persistence`` when
-        it is a part split from a confirmed track (its box overlaps the
-        track's predicted box by ``min_iou``, and another part continues the
-        track). Such a part has been seen, within the whole, so it is
-        reported at once."""
+        it is a part split from a confirmed track: its box overlaps the
+        track's ``predicted`` box by ``min_iou`` (the track, choosing before
+        any new object starts, then took another part). Such a part has
+        been seen, within the whole, so it is reported at once."""
         cfg = self.config
-        for track in self._tracks:
-            if track.age >= cfg.persistence and box_iou(track.predicted(), obj.box) >= cfg.min_iou:
+        for track, box in zip(self._tracks, predicted):
+            if track.age >= cfg.persistence and box_iou(box, obj.box) >= cfg.min_iou:
                 return cfg.persistence
         return 1
 
     def update(self, objects: list[MovingObject]) -> list[MovingObject]:
         """Match this frame's objects to tracks; return the confirmed ones with ids."""
         cfg = self.config
-        owners = self._assign(objects)
-        born = [self._born_age(o) if i is None else 0 for o, i in zip(objects, owners)]
+        predicted = [t.predicted() for t in self._tracks]
+        owners = self._assign(objects, predicted)
+        born = [self._born_age(o, predicted) if i is None else 0 for o, i in zip(objects, owners)]
         free = [i for i in range(len(self._tracks)) if i not in owners]
         confirmed = []
         for obj, best, age in zip(objects, owners, born):
