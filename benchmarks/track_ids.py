@@ -62,19 +62,18 @@ def _run(job: tuple) -> tuple[str, int, int, int, int]:
     return name, len(ids), len(set(ids)), switches, common
 
 
+def _line(label: str, boxed: int, ids: int, switches: int, common: int) -> str:
+    share = common / max(boxed, 1)
+    return f"{label:30s} boxed {boxed:4d}  ids {ids:3d}  switches {switches:3d}  one id {share:.3f}"
+
+
 def main() -> None:
     groups, results = sweep.on_masked_sequences(__doc__, _run)
     for group in groups:
         rows = [r for r in results if r[0].startswith(group)]
-        for name, boxed, ids, switches, common in rows:
-            share = common / max(boxed, 1)
-            counts = f"boxed {boxed:4d}  ids {ids:3d}  switches {switches:3d}"
-            print(f"  {name:28s} {counts}  one id {share:.2f}")
-        boxed, ids, switches, common = (sum(r[i] for r in rows) for i in range(1, 5))
-        print(
-            f"{group:30s} boxed {boxed:4d}  ids {ids:3d}  switches {switches:3d}  "
-            f"one id {common / max(boxed, 1):.3f}"
-        )
+        for name, *counts in rows:
+            print(_line(f"  {name}", *counts))
+        print(_line(group, *(sum(r[i] for r in rows) for i in range(1, 5))))
 
 
 if __name__ == "__main__":

@@ -17,9 +17,9 @@ from motiondetect.detection.tracking import Tracker
 from .velocity_scenes import H, W, background, pan_with_mover
 
 
-def _obj(x0: float, v: float = 5.0) -> MovingObject:
+def _obj(x0: float, v: float = 5.0, width: float = 20.0) -> MovingObject:
     mask = np.zeros((10, 10), bool)
-    return MovingObject(mask, (x0, 10.0, x0 + 20, 40.0), (v, 0.0))
+    return MovingObject(mask, (x0, 10.0, x0 + width, 40.0), (v, 0.0))
 
 
 def test_tracker_keeps_ids_and_needs_persistence():
@@ -55,7 +55,8 @@ def test_a_cut_ends_every_track():
 
 
 def _box(x0: float, x1: float) -> MovingObject:
-    return MovingObject(np.zeros((10, 10), bool), (x0, 10.0, x1, 40.0), (0.0, 0.0))
+    """A still object spanning ``x0`` to ``x1``."""
+    return _obj(x0, v=0.0, width=x1 - x0)
 
 
 def test_an_established_track_keeps_its_id_when_a_young_one_joins_it():
