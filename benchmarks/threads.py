@@ -28,7 +28,8 @@ _CHILD = """
 import resource, sys, time
 import cv2
 mode = sys.argv[2]
-cv2.setNumThreads(1 if mode != "ahead" else cv2.getNumThreads())
+if mode != "ahead":  # "ahead" keeps OpenCV's default threads
+    cv2.setNumThreads(1)
 if mode == "ahead-pool1":
     cv2.getNumThreads = lambda: 2  # this process only: stream() then measures ahead
 from motiondetect.detection.detector import MotionDetector
