@@ -18,6 +18,11 @@ are the prefixes of ``compare.py``'s sequence names: ``sample``, ``davis``,
 ``benchmarks/synth_set.py``, ``synth-rigid`` and ``synth-movers``. Scoring
 is ``compare.py``'s, frames 0-1 unscored; sequences run in parallel
 (``--jobs``), one OpenCV thread each.
+With ``--seeds N`` each variant runs N times, RANSAC drawing other samples
+each time (``[fit] seed`` 0 to N-1), and the pooled lines give the mean and
+the range over the seeds: a difference between variants smaller than that
+range is the fit's luck, not the variant (docs/results.md, "How much of a
+difference is noise").
 Set ``MOTIONDETECT_DATA`` to score another copy of the clips (for example
 every 2nd frame, from ``benchmarks/subsample.py``, or through H.264 from
 ``benchmarks/recompress.py``).
@@ -104,6 +109,32 @@ def summary(label: str, variant: str, counts: Counts, detail: bool = False) -> s
     return text
 
 
+def seeded(variants: dict, seeds: int) -> dict:
+    """Each variant once per RANSAC seed, named ``name#seed`` (peers once)."""
+    if seeds <= 1:
+        return variants
+    out = {}
+    for name, spec in variants.items():
+        if "peer" in spec:
+            out[name] = spec
+            continue
+        for seed in range(seeds):
+            fit = {**spec.get("fit", {}), "seed": seed}
+            out[f"{name}#{seed}"] = {**spec, "fit": fit}
+    return out
+
+
+def spread(label: str, variant: str, runs: list[Counts]) -> str:
+    """The mean and range of each pooled metric over the seeds' runs."""
+    keys = ("cell_f1", "object_recall", "false_alarm_regions_per_frame")
+    values = [[r.metrics()[k] or 0 for r in runs] for k in keys]
+    parts = [
+        f"{title} {sum(v) / len(v):.3f} ({min(v):.3f}-{max(v):.3f})"
+        for title, v in zip(("cell F1", "object recall", "FA/frame"), values, strict=True)
+    ]
+    return f"{label:28s} {variant:14s} " + "  ".join(parts) + f"  over {len(runs)} seeds"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -115,6 +146,7 @@ def main() -> None:
     parser.add_argument("variants", help="JSON object: variant name -> config sections")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--per-sequence", action="store_true")
+    parser.add_argument("--seeds", type=int, default=1, help="RANSAC seeds per variant")
     args = parser.parse_args()
     try:  # fail before any clip is read
         variants = json.loads(args.variants)
@@ -123,8 +155,9 @@ def main() -> None:
     except (ValueError, KeyError, TypeError, AttributeError) as exc:
         parser.error(f"bad variants: {exc}")
     groups = args.datasets.split(",")
+    runs = seeded(variants, args.seeds)
     jobs = [
-        (name, source, gt, variants)
+        (name, source, gt, runs)
         for name, source, gt, _ in compare.sequences(quick=False, synth="synth" in args.datasets)
         if any(name.startswith(g) for g in groups)
     ]
@@ -132,13 +165,18 @@ def main() -> None:
         results = pool.map(_run, jobs, chunksize=1)
     for group in groups:
         for variant in variants:
-            pooled = Counts()
+            copies = [r for r in runs if r == variant or r.startswith(variant + "#")]
+            pooled = {r: Counts() for r in copies}
             for name, counts in results:
                 if name.startswith(group):
-                    pooled.add(counts[variant])
-                    if args.per_sequence:
-                        print(summary("  " + name, variant, counts[variant], True))
-            print(summary(group, variant, pooled), flush=True)
+                    for r in copies:
+                        pooled[r].add(counts[r])
+                        if args.per_sequence:
+                            print(summary("  " + name, r, counts[r], True))
+            for r in copies:
+                print(summary(group, r, pooled[r]), flush=True)
+            if len(copies) > 1:
+                print(spread(group, variant, list(pooled.values())), flush=True)
 
 
 if __name__ == "__main__":

@@ -248,8 +248,9 @@ def fit_camera(
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
     homography, inliers = fit_homography(
-        points, velocity, config.ransac_px, outlier_px=config.max_speed_px, tight_px=config.tight_px
-    )
+        points, velocity, config.ransac_px,
+        outlier_px=config.max_speed_px, tight_px=config.tight_px, seed=config.seed,
+    )  # fmt: skip
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
     residual = sampled = None
@@ -276,7 +277,7 @@ def fit_camera(
         big = magnitude > config.parallax_sigmas * max(noise, 0.05)
         epipole = fit_epipole(
             points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape,
-            config.min_parallax_blocks, previous_epipole,
+            config.min_parallax_blocks, previous_epipole, np.random.default_rng(config.seed),
         )  # fmt: skip
     spread = residual_spread(magnitude)
     return CameraFit(

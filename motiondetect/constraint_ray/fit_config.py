@@ -90,6 +90,11 @@ class FitConfig:
         (0.75: a phone's main camera, 26 mm equivalent), for decomposing
         the plane's motion into the constraint ray
         (:mod:`~.plane_ray`; 0: no decomposition).
+    seed : int
+        Which random samples RANSAC draws (and the epipole's hypotheses):
+        0, the default, is OpenCV's own draw. Another seed gives another,
+        equally valid fit; the spread of the results over seeds is the
+        benchmarks' noise (``benchmarks/sweep.py --seeds``).
     """
 
     sample_step_px: int = 8
@@ -107,6 +112,7 @@ class FitConfig:
     edge_px: float = 4.0
     parallax: bool = False
     focal_share: float = 0.75
+    seed: int = 0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -126,6 +132,7 @@ class FitConfig:
                 "aperture_noise",
                 "edge_px",
                 "focal_share",
+                "seed",
             ),
             shares=("max_flagged_share", "blur_ratio"),
         )

@@ -49,6 +49,7 @@ _EM_ROUNDS = 10
 
 
 def _ransac(points: np.ndarray, velocity: np.ndarray, threshold_px: float) -> np.ndarray | None:
+    # OpenCV's RANSAC seeds its own generator the same way on every call.
     homography, _ = cv2.findHomography(
         points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
     )
@@ -99,6 +100,7 @@ def fit_homography(
     *,
     outlier_px: float,
     tight_px: float = 0.0,
+    seed: int = 0,
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """RANSAC homography from current points to where they were.
 
@@ -112,15 +114,26 @@ def fit_homography(
     and wins; where none does (parallax over many depths), the compromise
     explains more of the frame and is kept.
 
+    OpenCV draws the same samples from the same points on every call; a
+    non-zero ``seed`` shuffles the points first, so RANSAC draws others.
+
     Returns
     -------
     homography : (3, 3) ndarray or None
     inliers : (N,) ndarray of bool
         Within ``threshold_px`` of the plane kept (the choice changes which
-        plane, not what counts as explained).
+        plane, not what counts as explained), in the order given.
     """
     if len(points) < 8:
         return None, np.zeros(len(points), bool)
+    if seed:
+        order = np.random.default_rng(seed).permutation(len(points))
+        homography, shuffled = fit_homography(
+            points[order], velocity[order], threshold_px, outlier_px=outlier_px, tight_px=tight_px
+        )
+        inliers = np.empty_like(shuffled)
+        inliers[order] = shuffled
+        return homography, inliers
     homography = _ransac(points, velocity, threshold_px)
     if homography is None:
         return None, np.zeros(len(points), bool)
