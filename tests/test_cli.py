@@ -172,10 +172,14 @@ def test_roi_and_min_area_drop_detections(tmp_path, clip):
     x, y, w, h = everything[0]["bbox"]
     roi = f"{x},{y},{max(w, 4)},{max(h, 4)}"
     kept = detections("--roi", roi)
-    assert 0 < len(kept) < len(everything)
+    assert 0 < len(kept) <= len(everything)
     for d in kept:
         bx, by, bw, bh = d["bbox"]
         assert bx < x + max(w, 4) and x < bx + bw and by < y + max(h, 4) and y < by + bh
+    # The mover stays left of x = 160 (its boxes span x 23-137): a region
+    # of interest over x 200-320 keeps nothing.
+    assert all(d["bbox"][0] + d["bbox"][2] < 160 for d in everything)
+    assert detections("--roi", "200,0,120,240") == []
     polygon = tmp_path / "roi.txt"
     polygon.write_text(
         f"# the same box\n{x},{y} {x + max(w, 4)},{y} {x + max(w, 4)},{y + max(h, 4)} "

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from skimage import data
 
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.regions import discounted_near_edge
@@ -57,10 +58,17 @@ def test_dis_errs_about_twice_as_much_within_one_patch_of_the_border(shift, turn
     assert near >= 1.6 * inside  # measured 2.3 and 1.8
 
 
-def _regions(frames, ratio: float) -> tuple[int, int]:
+def _regions(frames, ratio: float, seed: int = 0) -> tuple[int, int]:
     """(frames with a region on a mover, regions touching no mover pixel)."""
-    md = MotionDetector("both", VelocityRayConfig(edge_error_ratio=ratio))
+    md = MotionDetector("both", VelocityRayConfig(edge_error_ratio=ratio), FitConfig(seed=seed))
     return found_and_stray(md, frames)
+
+
+def _stray_over_draws(frames, ratio: float) -> int:
+    """Stray regions summed over three RANSAC draws: one draw's count of a
+    few dozen moves by a few (docs/detectors.md, "How much of a difference
+    is noise")."""
+    return sum(_regions(frames, ratio, seed)[1] for seed in (0, 1, 2))
 
 
 def test_a_rigid_scene_flags_less_at_its_border_and_a_mover_is_kept():
@@ -69,9 +77,9 @@ def test_a_rigid_scene_flags_less_at_its_border_and_a_mover_is_kept():
     along the frame's border, where DIS errs more, half as often; a mover
     crossing the same scene is found on as many frames."""
     rigid = list(render_frames(SynthConfig("oblique", (), frames=30, speed=0.7, seed=107)))
-    unrated = _regions(rigid, 1.0)[1]
-    assert unrated >= 20  # measured 29
-    assert _regions(rigid, 2.0)[1] <= 0.6 * unrated  # measured 15
+    unrated = _stray_over_draws(rigid, 1.0)
+    assert unrated >= 60  # measured 78 (28, 26, 24)
+    assert _stray_over_draws(rigid, 2.0) <= 0.6 * unrated  # measured 35 (17, 9, 9)
     crossing = list(
         render_frames(SynthConfig("oblique", ("smooth",), frames=30, speed=0.7, seed=107))
     )
