@@ -21,7 +21,7 @@ is ``compare.py``'s, frames 0-1 unscored; sequences run in parallel
 With ``--seeds N`` each variant runs N times, RANSAC drawing other samples
 each time (``[fit] seed`` 0 to N-1), and the pooled lines give the mean and
 the range over the seeds: a difference between variants smaller than that
-range is the fit's luck, not the variant (docs/results.md, "How much of a
+range is the fit's luck, not the variant (docs/detectors.md, "How much of a
 difference is noise").
 Set ``MOTIONDETECT_DATA`` to score another copy of the clips (for example
 every 2nd frame, from ``benchmarks/subsample.py``, or through H.264 from
