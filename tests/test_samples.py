@@ -87,14 +87,19 @@ def test_sample_with_its_true_camera_motion(name):
     check_bounds(sample_counts(folder, detector), KNOWN_BOUNDS[name])
 
 
-def test_rigid_only_scene_has_no_event_and_the_two_way_check_is_why(tmp_path):
+def _rigid_only_run(output, **sections):
+    """``process_input`` on the rigid-only sample, with config ``sections``."""
     from motiondetect.app.inputs import InputJob
     from motiondetect.app.process import process_input
     from motiondetect.app.settings import make_settings
 
     clip = SAMPLES / "uniform_rigid" / "video.mp4"
-    settings = make_settings({"output": tmp_path, "video": False, "timeline": False})
-    result = process_input(InputJob(clip, "rigid"), settings)
+    settings = make_settings({"output": output, "video": False, "timeline": False, **sections})
+    return process_input(InputJob(clip, "rigid"), settings)
+
+
+def test_rigid_only_scene_has_no_event_and_the_two_way_check_is_why(tmp_path):
+    result = _rigid_only_run(tmp_path)
     assert result.status == "done" and result.summary["totals"]["events"] == 0
     unchecked = MotionDetector("both", DenseFlowConfig(check_preset="off"))
     m = sample_counts(SAMPLES / "uniform_rigid", unchecked).metrics()
@@ -107,15 +112,7 @@ def test_rigid_only_scene_has_no_event_on_other_ransac_draws(tmp_path, seed):
     # fills in wrongly, by up to 6 px, for frames: the summed residual added
     # it up and flagged it on 3 frames of 60 (an event) on seeds 1-7, until
     # its seeds too had to be confirmed by the flow measured the other way.
-    from motiondetect.app.inputs import InputJob
-    from motiondetect.app.process import process_input
-    from motiondetect.app.settings import make_settings
-
-    clip = SAMPLES / "uniform_rigid" / "video.mp4"
-    settings = make_settings(
-        {"output": tmp_path, "video": False, "timeline": False, "fit": {"seed": seed}}
-    )
-    result = process_input(InputJob(clip, "rigid"), settings)
+    result = _rigid_only_run(tmp_path, fit={"seed": seed})
     assert result.status == "done" and result.summary["settings"]["configs"]["fit"]["seed"] == seed
     assert result.summary["totals"]["events"] == 0
     assert result.summary["totals"]["detections"] <= 1

@@ -304,3 +304,5 @@ def test_forward_backward_check_on_a_list_of_points_equals_the_whole_frame():
     assert np.array_equal(confirmed_both_ways(v, f, source), expected)
     ys, xs = np.nonzero(rng.random((h, w)) < 0.3)
     assert np.array_equal(confirmed_both_ways(v[ys, xs], f, source[ys, xs]), expected[ys, xs])
+    none = np.zeros((0, 2), np.float32)  # no points: an empty answer, not remap's error
+    assert confirmed_both_ways(none, f, none).shape == (0,)

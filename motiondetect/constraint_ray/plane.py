@@ -49,7 +49,6 @@ _EM_ROUNDS = 10
 
 
 def _ransac(points: np.ndarray, velocity: np.ndarray, threshold_px: float) -> np.ndarray | None:
-    # OpenCV's RANSAC seeds its own generator the same way on every call.
     homography, _ = cv2.findHomography(
         points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
     )

@@ -293,8 +293,7 @@ class VelocityRayDetector:
         # frame's test: flow filled in where the view uncovers background
         # behind a near edge is wrong for frames, and adds up in the sum.
         ys, xs = np.nonzero(seeds)
-        if len(ys):
-            seeds[ys, xs] = field.confirmed_at(ys, xs)
+        seeds[ys, xs] = field.confirmed_at(ys, xs)
         slow = hysteresis(distance, tolerance, self.config.grow_ratio, seeds)
         if not slow.any():
             return slow

@@ -240,7 +240,9 @@ def confirmed_both_ways(
     shape = velocity.shape[:-1]
     velocity = velocity.reshape(-1, 2)
     n = len(velocity)
-    cols = min(max(n, 1), _REMAP_COLUMNS)  # remap's map holds under 2^15 columns and rows
+    if n == 0:
+        return np.zeros(shape, bool)
+    cols = min(n, _REMAP_COLUMNS)  # remap's map holds under 2^15 columns and rows
     points = np.zeros((-(-n // cols) * cols, 2), np.float32)
     points[:n] = source.reshape(-1, 2)
     back = cv2.remap(
