@@ -231,6 +231,52 @@ def test_a_still_cameras_slow_mover_needs_no_moving_images_floor():
             assert not md.process(np.clip(image, 0, 255).astype(np.uint8), t, t / 30).regions
 
 
+def _still_noisy_field(rng, speed: float, plane_speed: float | None):
+    """One frame of a still camera whose flow has 0.15 px of noise per
+    component, with a 20x20 mover at ``speed`` px/frame that changes the
+    image; the fit records the measured median speed (about 0.2 px/frame,
+    all noise) and the plane's own (none; ``None``: the measured one)."""
+    from motiondetect.constraint_ray.camera_fit import CameraFit
+    from motiondetect.measurement.dense_flow import VelocityField, pixel_grid, vector_length
+    from motiondetect.measurement.normal_flow import GridGeometry
+
+    h, w = 96, 128
+    velocity = rng.normal(0, 0.15, (h, w, 2)).astype(np.float32)
+    velocity[40:60, 50:70] += (speed, 0.0)
+    difference = np.abs(rng.normal(0, 2.0, (h, w))).astype(np.uint8)
+    difference[40:60, 50:70] = 40
+    measured = float(np.median(vector_length(velocity[8:-8:8, 8:-8:8])))
+    plane = measured if plane_speed is None else plane_speed
+    fit = CameraFit(
+        np.eye(3), velocity, 0.15, 0.95, None, "", measured, difference, 0.15, plane_speed_px=plane
+    )
+    grey = rng.integers(0, 255, (h, w)).astype(np.uint8)
+    return VelocityField(velocity, grey, grey, GridGeometry((w, h), (w, h)), pixel_grid(w, h), fit)
+
+
+def test_the_still_floor_follows_the_planes_speed_not_the_noises():
+    """DIS's noise alone gives a still camera's velocities a median speed
+    (about 0.2 px/frame here, as on UCSD's foggy traffic), which is not the
+    image moving: the summed test's floor follows the plane's own speed. A
+    mover at 0.4 px/frame under a still, noisy camera is found from its
+    fourth frame on (measured 9 of 12 frames); with the floor set by the
+    measured median speed it is never found; noise alone flags nothing."""
+    from motiondetect.constraint_ray.velocity_filter import VelocityRayDetector
+
+    for plane_speed, most in ((0.0, True), (None, False)):
+        rng, detector = np.random.default_rng(0), VelocityRayDetector()
+        masks = [
+            detector.process(_still_noisy_field(rng, 0.4, plane_speed)).mask for _ in range(12)
+        ]
+        found = sum(m[40:60, 50:70].mean() > 0.5 for m in masks)
+        assert (found >= 8) == most and (found == 0) != most, found
+        assert not any(m[:35].any() or m[65:].any() for m in masks)
+    rng, detector = np.random.default_rng(1), VelocityRayDetector()
+    assert not any(
+        detector.process(_still_noisy_field(rng, 0.0, 0.0)).mask.any() for _ in range(12)
+    )
+
+
 def test_seeds_are_tested_on_the_motion_the_image_determines():
     """uniform_rigid's brick wall has long mortar lines: along them the flow is
     filled in, and wrong by pixels. Testing seeds only on the determined

@@ -118,8 +118,10 @@ class VelocityRayConfig:
         0.01-0.04 deg/frame flag at most one region in 50 frames
         (docs/detectors.md, "A still camera's slow movers").
     slow_full_speed_px : float
-        The image's speed (the fit's median, work px/frame) from which the
-        repeating error under motion has its full size: DIS's median error on
+        The image's speed (the fitted plane's own median speed,
+        ``CameraFit.plane_speed_px``, work px/frame; not the measured
+        velocities' median, which DIS's noise raises on a still camera) from
+        which the repeating error under motion has its full size: DIS's median error on
         known translations is none still, 0.023 px at 0.1 px/frame and
         0.04-0.06 px from 0.3 px/frame on. Below it the floor runs in
         proportion from ``slow_still_px`` to ``slow_px``; 0: ``slow_px`` at
@@ -269,12 +271,13 @@ class VelocityRayDetector:
         return without_frame_edge(distance, band), tolerance
 
     def _slow_floor(self, fit: CameraFit) -> float:
-        """The summed test's floor for this frame's image speed, px/frame: from
-        ``slow_still_px`` still to ``slow_px`` at ``slow_full_speed_px``."""
+        """The summed test's floor for this frame's image speed (the plane's),
+        px/frame: from ``slow_still_px`` still to ``slow_px`` at
+        ``slow_full_speed_px``."""
         cfg = self.config
         if cfg.slow_full_speed_px <= 0:
             return cfg.slow_px
-        share = min(1.0, fit.median_speed_px / cfg.slow_full_speed_px)
+        share = min(1.0, fit.plane_speed_px / cfg.slow_full_speed_px)
         return cfg.slow_still_px + (cfg.slow_px - cfg.slow_still_px) * share
 
     def _slow_movers(
@@ -364,4 +367,6 @@ def _with_known(fit: CameraFit, known: ObserverMotion | None) -> CameraFit:
     """A fit that known ego-motion made reliable keeps its numbers but no reason."""
     if known is None or fit.reliable:
         return fit
-    return dataclasses.replace(fit, inlier_share=1.0, epipole=None, reason="", median_speed_px=0.0)
+    return dataclasses.replace(
+        fit, inlier_share=1.0, epipole=None, reason="", median_speed_px=0.0, plane_speed_px=0.0
+    )
