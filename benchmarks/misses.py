@@ -24,12 +24,10 @@ import compare
 import cv2
 import numpy as np
 import sweep
+from fragments import MIN_OBJECT_PX
 
 from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import HIT_FRACTION, truth_masks
-
-#: Smallest object counted, px (``motiondetect evaluate``'s default).
-MIN_OBJECT_PX = 20
 
 
 def found_parts(truth: np.ndarray, flagged: np.ndarray) -> list[tuple[int, bool]]:

@@ -288,11 +288,5 @@ def fit_camera(
     spread = residual_spread(magnitude)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
-        change_noise, sharp, energy, _plane_speed(points, homography),
+        change_noise, sharp, energy, float(np.median(vector_length(velocity - sampled))),
     )  # fmt: skip
-
-
-def _plane_speed(points: np.ndarray, homography: np.ndarray) -> float:
-    """Median length of the plane's velocity at ``points`` (N, 2), px/frame."""
-    previous = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), homography)
-    return float(np.median(np.hypot(*(points - previous.reshape(-1, 2)).T)))
