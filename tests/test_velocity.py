@@ -172,6 +172,17 @@ def test_a_cut_is_unreliable_and_flags_nothing():
     assert fit.edge_band_px == pytest.approx(FitConfig().edge_px + fit.median_speed_px)
 
 
+def test_a_still_camera_is_static_however_noisy_its_flow():
+    """The class follows the plane's own speed: flow noise whose median
+    length is 0.35 px/frame (a dim still camera) does not move the camera."""
+    from motiondetect.constraint_ray.camera_fit import STATIC_SPEED_PX, CameraFit
+
+    residual = np.zeros((H, W, 2), np.float32)
+    for plane_speed, label in ((0.02, "static"), (1.0, "plane (no parallax)")):
+        fit = CameraFit(np.eye(3), residual, 0.3, 0.9, None, "", 0.35, plane_speed_px=plane_speed)
+        assert 0.35 > STATIC_SPEED_PX and fit.label == label
+
+
 def test_off_ray_measures_across_the_line_to_the_epipole():
     epipole = np.array([160.0, 120.0, 1.0])
     points = np.array([[260.0, 120.0], [260.0, 120.0], [160.0, 20.0]])

@@ -41,7 +41,8 @@ from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
 
-#: Median speed below which a frame without parallax counts as static, px/frame.
+#: The plane's median speed below which a frame without parallax counts as
+#: static, px/frame.
 STATIC_SPEED_PX = 0.3
 
 
@@ -184,7 +185,9 @@ class CameraFit:
     def class_id(self) -> int:
         """The canonical class (section 3.1) this fitted motion falls in.
 
-        0 static; 1 no parallax (rotation, or a planar scene) or parallax
+        0 static (the plane's own speed, ``plane_speed_px``, below
+        :data:`STATIC_SPEED_PX`: DIS's noise does not make a still camera
+        move); 1 no parallax (rotation, or a planar scene) or parallax
         from a distant epipole (translation across the view); 2 parallax
         toward an epipole inside the frame (forward motion, with or without
         rotation: classes 2 and 4 differ only in the part the plane fit
@@ -193,7 +196,7 @@ class CameraFit:
         if self.homography is None or self.reason:
             return -1
         if self.epipole is None:
-            return 0 if self.median_speed_px < STATIC_SPEED_PX else 1
+            return 0 if self.plane_speed_px < STATIC_SPEED_PX else 1
         return 2 if abs(self.epipole[2]) > 1e-6 else 1
 
     @property
