@@ -121,9 +121,9 @@ class VelocityRayConfig:
         The image's speed (the fitted plane's own median speed,
         ``CameraFit.plane_speed_px``, work px/frame; not the measured
         velocities' median, which DIS's noise raises on a still camera) from
-        which the repeating error under motion has its full size: DIS's median error on
-        known translations is none still, 0.023 px at 0.1 px/frame and
-        0.04-0.06 px from 0.3 px/frame on. Below it the floor runs in
+        which the repeating error under motion has its full size: DIS's
+        median error on known translations is none still, 0.023 px at 0.1
+        px/frame and 0.04-0.06 px from 0.3 px/frame on. Below it the floor runs in
         proportion from ``slow_still_px`` to ``slow_px``; 0: ``slow_px`` at
         every speed.
     edge_error_ratio : float
