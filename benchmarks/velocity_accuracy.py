@@ -34,7 +34,7 @@ import numpy as np
 from skimage import data
 
 from motiondetect.constraint_ray.hough import coarse_field
-from motiondetect.measurement.dense_flow import DenseFlow
+from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig
 from motiondetect.measurement.normal_flow import NormalFlowPipeline, StageConfig
 
 SIZE = 320
@@ -75,8 +75,10 @@ def true_velocity(kind: str, amount: float, t: int) -> np.ndarray:
     return np.stack([xx, yy], -1) - before
 
 
-def dis_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray, float]:
-    flow = DenseFlow()
+def dis_errors(
+    kind: str, amount: float, frames: int = 4, config: DenseFlowConfig | None = None
+) -> tuple[np.ndarray, float]:
+    flow = DenseFlow(config)
     for t in range(frames):
         field = flow.process(frame(kind, amount, t))
     truth = true_velocity(kind, amount, frames - 1)
@@ -100,7 +102,9 @@ def hough_errors(kind: str, amount: float, frames: int = 4) -> tuple[np.ndarray,
 
 
 #: px/frame, off whole pixels (a whole-pixel shift copies pixels exactly);
-#: 40.5 and 50.5 lie past the band, to show where it ends.
+#: 40.5 and 50.5 lie past DIS's reach from rest, to show where it ends (the
+#: default starts the last of the four frames' searches from the field
+#: before, ``DenseFlowConfig.start_speed_px``, and reaches further).
 SPEEDS = (0.1, 0.3, 0.7, 1.5, 3.5, 7.5, 15.5, 29.5, 40.5, 50.5)
 MOTIONS = [
     *(("translation", s, f"translation {s:g} px/frame") for s in SPEEDS),
@@ -171,6 +175,13 @@ def main() -> None:
         print("\n".join(header))
         for kind, amount, label in MOTIONS:
             err, speed = measure(kind, amount)
+            print(row(label, speed, err), flush=True)
+    print("\n**DIS, every search from rest (`start_speed_px = inf`)**\n")
+    print("\n".join(header))
+    rest = DenseFlowConfig(start_speed_px=float("inf"))
+    for kind, amount, label in MOTIONS:
+        if kind == "translation" and amount > 7.5:  # slower: the same as the default
+            err, speed = dis_errors(kind, amount, config=rest)
             print(row(label, speed, err), flush=True)
 
 

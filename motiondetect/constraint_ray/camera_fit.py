@@ -221,10 +221,12 @@ class CameraFit:
 CUT = "cut"
 
 
-def _reason(homography, share, speed, cut, blurred, config: FitConfig) -> str:
+def _reason(homography, share, speed, searched_px, cut, blurred, config: FitConfig) -> str:
+    """Why the frame cannot be judged, or ""; ``searched_px``: how far DIS
+    searched from its start (``VelocityField.searched_px``), None: from rest."""
     if homography is None or share < config.min_inlier_share:
         return "too few inliers"
-    if speed > config.max_speed_px:
+    if (speed if searched_px is None else searched_px) > config.max_speed_px:
         return "motion beyond the band"
     if cut > config.cut_grey:
         return CUT
@@ -273,7 +275,7 @@ def fit_camera(
     cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
     sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0  # the blur test is off
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
-    reason = _reason(homography, share, speed, cut, blurred, config)
+    reason = _reason(homography, share, speed, field.searched_px, cut, blurred, config)
     edge = config.edge_px + speed
     if reason:
         return CameraFit(

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from motiondetect.config_checks import check_fields
+from motiondetect.measurement.flow_config import DIS_REACH_PX
 
 
 @dataclass(frozen=True)
@@ -34,7 +35,11 @@ class FitConfig:
         image determines them: :func:`~.plane.explained_share`) the frame cannot be
         judged.
     max_speed_px : float
-        Median speed above which the motion is outside the measurable band.
+        Median distance of the velocities from where DIS's search started
+        (rest, or the last field on a steady fast pan:
+        ``VelocityField.searched_px``) above which the motion is outside
+        the measurable band; by default DIS's reach,
+        :data:`~motiondetect.measurement.dense_flow.DIS_REACH_PX`.
     cut_grey : float
         Mean absolute grey difference between the frame and the previous
         one warped by the fit above which the frame is taken as a cut.
@@ -101,7 +106,7 @@ class FitConfig:
     ransac_px: float = 1.0
     tight_px: float = 0.3
     min_inlier_share: float = 0.25
-    max_speed_px: float = 30.0
+    max_speed_px: float = DIS_REACH_PX
     cut_grey: float = 40.0
     parallax_sigmas: float = 4.0
     min_parallax_blocks: int = 6

@@ -16,91 +16,19 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Literal
+from typing import Any
 
 import cv2
 import numpy as np
 
-from motiondetect.config_checks import check_fields
 from motiondetect.measurement import stages
 from motiondetect.measurement.aperture import structure_tensor
+from motiondetect.measurement.flow_config import DIS_REACH_PX, PRESETS, DenseFlowConfig
 from motiondetect.measurement.normal_flow import GridGeometry
-from motiondetect.measurement.picture import BAR_LIMIT, Picture, PictureArea
+from motiondetect.measurement.picture import Picture, PictureArea
 from motiondetect.measurement.repeats import REPEAT, Repeat, RepeatedFrames
 
 _REMAP_COLUMNS = 4096  # points per row when remapping a list of points
-
-PRESETS = {
-    "ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
-    "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
-    "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM,
-}
-
-
-@dataclass(frozen=True)
-class DenseFlowConfig:
-    """Settings of the 2-D velocity measurement.
-
-    Attributes
-    ----------
-    work_size : int
-        Long side of the working resolution, px; never above the input's
-        (frames are only ever reduced). Velocities are in work px/frame.
-    preset : {"ultrafast", "fast", "medium"}
-        DIS preset (docs/detectors.md measures each on every data set).
-    descent_iterations : int or None
-        Gradient-descent iterations per patch, replacing the preset's (25
-        for "medium"): 8 measured as good on every data set, for less time.
-    patch_stride : int
-        Step between DIS patches, work px (the "medium" preset's is 3): 4
-        changed no data set's pooled cell F1 by more than 0.015 and costs 23 %
-        less (docs/detectors.md).
-    refinement_iterations : int or None
-        Variational refinement iterations, replacing the preset's (5 for
-        "medium"); None keeps the preset's. Fewer are faster (3: about a
-        fifth less flow time) but left DAVIS's flow noisier: lower cell F1 on
-        most of its clips (docs/detectors.md), so the default keeps 5.
-    check_preset : {"ultrafast", "fast", "medium", "off"}
-        DIS preset of the flow measured the other way, from the previous
-        frame to this one, for the forward-backward check
-        (:func:`confirmed_both_ways`); "off" skips it. "ultrafast" costs
-        about 1 ms a frame at 320 px and caught as many of DIS's errors as
-        "fast" (docs/detectors.md).
-    bar_limit : int
-        Grey level (of 255) at or below which a band along a frame edge that
-        has stayed dark is a black bar (FFmpeg cropdetect's 24; a band
-        without detail, a blurred panel, is one too), left out of the
-        measurement (:mod:`~motiondetect.measurement.picture`); 0 measures
-        the whole frame.
-    repeat_level : float
-        Mean absolute difference from the last frame, grey levels at working
-        size, at or below which a frame may repeat it (and then also at most
-        a quarter of the usual difference between frames;
-        :mod:`~motiondetect.measurement.repeats`); 0: every frame is measured.
-    """
-
-    work_size: int = 320
-    preset: Literal["ultrafast", "fast", "medium"] = "medium"
-    descent_iterations: int | None = 8
-    patch_stride: int = 4
-    refinement_iterations: int | None = None
-    check_preset: Literal["ultrafast", "fast", "medium", "off"] = "ultrafast"
-    bar_limit: int = BAR_LIMIT
-    repeat_level: float = 1.0
-
-    def __post_init__(self) -> None:
-        check_fields(
-            self,
-            positive=("work_size", "patch_stride"),
-            non_negative=("bar_limit", "repeat_level"),
-            choices={"preset": tuple(PRESETS), "check_preset": (*PRESETS, "off")},
-        )
-        if self.descent_iterations is not None:
-            check_fields(self, positive=("descent_iterations",))
-        if self.refinement_iterations is not None:
-            check_fields(self, non_negative=("refinement_iterations",))
-        if self.work_size < stages.MIN_FRAME_SIDE:
-            raise ValueError(f"work_size must be at least 64, but got {self.work_size}")
 
 
 @dataclass(frozen=True)
@@ -138,6 +66,11 @@ class VelocityField:
     interval_s : float, optional
         Seconds between the two frames measured, attached with the camera
         when the frames' times are known; None: one frame step.
+    searched_px : float, optional
+        How far DIS searched, work px/frame: the median distance of the
+        velocities from the last field it started from on a steady fast pan
+        (``DenseFlowConfig.start_speed_px``); None: it started from rest, and
+        the velocities' speed is that distance (``FitConfig.max_speed_px``).
     """
 
     velocity_px: np.ndarray
@@ -151,6 +84,7 @@ class VelocityField:
     forward_px: np.ndarray | None = None
     picture: Picture | None = None
     interval_s: float | None = None
+    searched_px: float | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -305,10 +239,12 @@ class DenseFlow:
         self._repeats = RepeatedFrames(self.config.repeat_level)
         self._geometry: GridGeometry | None = None
         self._grid: np.ndarray | None = None
+        self._start: np.ndarray | None = None
+        self._last_median: np.ndarray | None = None
 
     def reset(self) -> None:
         """Forget the delayed frame, the picture area and the usual difference between frames."""
-        self._previous = None
+        self._forget_frames()
         self._repeats.reset()
         if self._pictures is not None:
             self._pictures.reset()
@@ -339,24 +275,63 @@ class DenseFlow:
         stages.validate_frame(frame)
         picture = None if self._pictures is None else self._pictures.update(frame)
         if picture != self._picture:
-            self._picture, self._previous = picture, None
+            self._picture = picture
+            self._forget_frames()
         if picture is not None:
             frame = picture.crop(frame)
         h, w = frame.shape[:2]
         if self._geometry is None or self._geometry.input_size != (w, h):
             self._geometry = self.geometry_for(w, h)
             self._grid = pixel_grid(*self._geometry.work_size)
-            self._previous = None
+            self._forget_frames()
         grey = working_grey(frame, self._geometry.work_size)
         if self._previous is not None and self._repeats.repeats(grey, self._previous):
             return REPEAT
         previous, self._previous = self._previous, grey
         if previous is None:
             return None
-        # Flow from the current frame back to the previous one, at current pixels.
-        velocity = -self._dis.calc(grey, previous, None)
-        forward = None if self._check is None else self._check.calc(previous, grey, None)
+        velocity, forward, searched = self._measured(grey, previous)
         return VelocityField(
             velocity, grey, previous, self._geometry, self._grid,
-            patch_px=self._patch_px, forward_px=forward, picture=picture,
+            patch_px=self._patch_px, forward_px=forward, picture=picture, searched_px=searched,
         )  # fmt: skip
+
+    def _forget_frames(self) -> None:
+        self._previous = self._start = self._last_median = None
+
+    def _measured(self, grey: np.ndarray, previous: np.ndarray) -> tuple:
+        """(velocity, the flow the other way or None, how far DIS searched
+        from its start or None when it started from rest): started from the
+        last field on a steady fast pan, from rest when the search from it
+        went beyond DIS's reach (the pan broke off)."""
+        # Flow from the current frame back to the previous one, at current pixels.
+        start, searched = self._start, None
+        if start is not None:
+            velocity = -self._dis.calc(grey, previous, np.ascontiguousarray(-start))
+            searched = float(np.median(vector_length(_lattice(velocity - start))))
+            if searched > DIS_REACH_PX:
+                start, searched = None, None
+        if start is None:
+            velocity = -self._dis.calc(grey, previous, None)
+        forward = None
+        if self._check is not None:
+            init = None if start is None else start.copy()  # DIS writes into it
+            forward = self._check.calc(previous, grey, init)
+        self._start = self._next_start(velocity)
+        return velocity, forward, searched
+
+    def _next_start(self, velocity: np.ndarray) -> np.ndarray | None:
+        """The next search's start: this field, when its median speed passes
+        ``start_speed_px`` and its median velocity changed by less than half
+        its length since the last field (a steady pan, not a jerk)."""
+        sampled = _lattice(velocity)
+        median, last = np.median(sampled, axis=0), self._last_median
+        self._last_median = median
+        if float(np.median(vector_length(sampled))) <= self.config.start_speed_px or last is None:
+            return None
+        return velocity if np.hypot(*(median - last)) < 0.5 * np.hypot(*median) else None
+
+
+def _lattice(vectors: np.ndarray) -> np.ndarray:
+    """(N, 2): ``vectors`` ((h, w, 2)) on an 8-px lattice, for their medians."""
+    return vectors[4::8, 4::8].reshape(-1, 2)
