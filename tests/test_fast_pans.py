@@ -100,3 +100,18 @@ def test_a_pan_that_breaks_off_is_measured_from_rest():
     v = last.velocity_px[20:-20, 40:-40].reshape(-1, 2)
     assert np.percentile(np.hypot(v[:, 0] - 10, v[:, 1]), 90) < 0.5
     assert fit_camera(last, FitConfig()).reliable
+
+
+def test_a_search_from_rest_is_not_led_by_an_earlier_start():
+    """OpenCV's DIS keeps an initial flow it was given for its later calls.
+    A field measured from rest after searches from the last field (here the
+    pan breaking off) equals the same two frames measured afresh."""
+    frames = _pan([20, 30, 40, 40, -10])
+    flow = DenseFlow(DenseFlowConfig(work_size=W))
+    last = [flow.process(frame) for frame in frames][-1]
+    fresh = DenseFlow(DenseFlowConfig(work_size=W))
+    fresh.process(frames[-2])
+    alone = fresh.process(frames[-1])
+    assert last.searched_px is None
+    np.testing.assert_array_equal(last.velocity_px, alone.velocity_px)
+    np.testing.assert_array_equal(last.forward_px, alone.forward_px)

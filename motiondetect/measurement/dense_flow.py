@@ -223,16 +223,17 @@ class DenseFlow:
 
     def __init__(self, config: DenseFlowConfig | None = None) -> None:
         self.config = config or DenseFlowConfig()
-        self._dis = cv2.DISOpticalFlow_create(PRESETS[self.config.preset])
-        if self.config.descent_iterations is not None:
-            self._dis.setGradientDescentIterations(self.config.descent_iterations)
-        self._dis.setPatchStride(self.config.patch_stride)
-        if self.config.refinement_iterations is not None:
-            self._dis.setVariationalRefinementIterations(self.config.refinement_iterations)
+        # OpenCV's DIS keeps an initial flow it was given for its later calls,
+        # so the searches from the last field have DIS objects of their own
+        # and those from rest stay from rest.
+        self._dis, self._started_dis = _main_dis(self.config), _main_dis(self.config)
         # The finest pyramid level DIS measures on is 2^finest_scale coarser.
         self._patch_px = self._dis.getPatchSize() * 2 ** self._dis.getFinestScale()
         check = self.config.check_preset
-        self._check = None if check == "off" else cv2.DISOpticalFlow_create(PRESETS[check])
+        self._check = self._started_check = None
+        if check != "off":
+            self._check = cv2.DISOpticalFlow_create(PRESETS[check])
+            self._started_check = cv2.DISOpticalFlow_create(PRESETS[check])
         self._previous: np.ndarray | None = None
         self._pictures = PictureArea(self.config.bar_limit) if self.config.bar_limit > 0 else None
         self._picture: Picture | None = None
@@ -307,16 +308,17 @@ class DenseFlow:
         # Flow from the current frame back to the previous one, at current pixels.
         start, searched = self._start, None
         if start is not None:
-            velocity = -self._dis.calc(grey, previous, np.ascontiguousarray(-start))
+            velocity = -self._started_dis.calc(grey, previous, np.ascontiguousarray(-start))
             searched = float(np.median(vector_length(_lattice(velocity - start))))
             if searched > DIS_REACH_PX:
                 start, searched = None, None
         if start is None:
             velocity = -self._dis.calc(grey, previous, None)
         forward = None
-        if self._check is not None:
-            init = None if start is None else start.copy()  # DIS writes into it
-            forward = self._check.calc(previous, grey, init)
+        if self._check is not None and start is None:
+            forward = self._check.calc(previous, grey, None)
+        elif self._check is not None:  # DIS writes into the flow it starts from
+            forward = self._started_check.calc(previous, grey, start.copy())
         self._start = self._next_start(velocity)
         return velocity, forward, searched
 
@@ -330,6 +332,17 @@ class DenseFlow:
         if float(np.median(vector_length(sampled))) <= self.config.start_speed_px or last is None:
             return None
         return velocity if np.hypot(*(median - last)) < 0.5 * np.hypot(*median) else None
+
+
+def _main_dis(config: DenseFlowConfig):
+    """The main flow's DIS, set up by ``config``."""
+    dis = cv2.DISOpticalFlow_create(PRESETS[config.preset])
+    if config.descent_iterations is not None:
+        dis.setGradientDescentIterations(config.descent_iterations)
+    dis.setPatchStride(config.patch_stride)
+    if config.refinement_iterations is not None:
+        dis.setVariationalRefinementIterations(config.refinement_iterations)
+    return dis
 
 
 def _lattice(vectors: np.ndarray) -> np.ndarray:
