@@ -39,7 +39,7 @@ class FitConfig:
         (rest, or the last field on a steady fast pan:
         ``VelocityField.searched_px``) above which the motion is outside
         the measurable band; by default DIS's reach,
-        :data:`~motiondetect.measurement.dense_flow.DIS_REACH_PX`.
+        :data:`~motiondetect.measurement.flow_config.DIS_REACH_PX`.
     cut_grey : float
         Mean absolute grey difference between the frame and the previous
         one warped by the fit above which the frame is taken as a cut.

@@ -8,7 +8,10 @@ least-squares velocity from the normal-flow stages (NOTES section 6).
 
 :class:`DenseFlow` holds the one-frame delay, like the normal-flow
 pipeline; the field is given at the *current* frame's pixels, so masks
-built from it line up with the frame being reported.
+built from it line up with the frame being reported. On a steady fast pan
+DIS starts its search from the last field instead of from rest
+(``DenseFlowConfig.start_speed_px``), which carries it past the reach of
+its search, :data:`~.flow_config.DIS_REACH_PX`.
 """
 
 from __future__ import annotations
@@ -315,10 +318,11 @@ class DenseFlow:
         if start is None:
             velocity = -self._dis.calc(grey, previous, None)
         forward = None
-        if self._check is not None and start is None:
-            forward = self._check.calc(previous, grey, None)
-        elif self._check is not None:  # DIS writes into the flow it starts from
-            forward = self._started_check.calc(previous, grey, start.copy())
+        if self._check is not None:  # DIS writes into the flow it starts from: a copy
+            check, init = (
+                (self._check, None) if start is None else (self._started_check, start.copy())
+            )
+            forward = check.calc(previous, grey, init)
         self._start = self._next_start(velocity)
         return velocity, forward, searched
 

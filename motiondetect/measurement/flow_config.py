@@ -66,7 +66,7 @@ class DenseFlowConfig:
         from rest, when the pan is steady: its median velocity changed by
         less than half its length since the field before (a jerk, a
         reversal, starts from rest). DIS's search reaches only about 30
-        px/frame from where it starts (docs/stages.md); started from the
+        px/frame from where it starts (:data:`DIS_REACH_PX`); started from the
         last field, a pan that speeds up steadily is measured well beyond
         (docs/detectors.md, "Fast steady pans"). 15, half that reach: a
         pan that doubles its speed in one frame is still measured. ``inf``:
