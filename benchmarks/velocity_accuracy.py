@@ -180,7 +180,7 @@ def main() -> None:
     print("\n".join(header))
     rest = DenseFlowConfig(start_speed_px=float("inf"))
     for kind, amount, label in MOTIONS:
-        if kind == "translation" and amount > 7.5:  # slower: the same as the default
+        if kind == "translation" and amount > 7.5:  # slower ones never start: as the default
             err, speed = dis_errors(kind, amount, config=rest)
             print(row(label, speed, err), flush=True)
 

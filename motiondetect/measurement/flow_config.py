@@ -51,7 +51,7 @@ class DenseFlowConfig:
     check_preset : {"ultrafast", "fast", "medium", "off"}
         DIS preset of the flow measured the other way, from the previous
         frame to this one, for the forward-backward check
-        (:func:`confirmed_both_ways`); "off" skips it. "ultrafast" costs
+        (:func:`~.dense_flow.confirmed_both_ways`); "off" skips it. "ultrafast" costs
         about 1 ms a frame at 320 px and caught as many of DIS's errors as
         "fast" (docs/detectors.md).
     bar_limit : int
