@@ -40,9 +40,10 @@ def _hits(frames, results) -> tuple[int, int]:
 
 def test_a_slow_mover_filmed_at_60_fps_is_found_when_judged_at_30():
     """The samples' uniform camera and smooth mover at 60 frames/s: half the
-    motion a frame. Judged every frame, the mover's residual sinks into the
-    flow's noise on most frames; judged every 2nd frame (``auto`` at 60 fps),
-    it moves as far as at 30 frames/s and is found."""
+    motion a frame. Judged every 2nd frame (``auto`` at 60 fps), it moves as
+    far as at 30 frames/s and is found. (Judged every frame it was found on
+    at most half the frames until tracked movers stopped voting for the
+    plane, issue 13's fifty-ninth session; now on 33 of 36 as well.)"""
     frames = scene("uniform", ("smooth",), frames=40, speed=0.35, fps=60.0, seed=107)
     images = [fr.image for fr in frames]
     auto = list(motiondetect.detect(images, fps=60.0))
@@ -51,8 +52,6 @@ def test_a_slow_mover_filmed_at_60_fps_is_found_when_judged_at_30():
     assert all(r.held_from is None for r in every)
     found, scored = _hits(frames, auto)
     assert scored >= 30 and found >= 0.75 * scored
-    found_every, _ = _hits(frames, every)
-    assert found_every <= 0.5 * scored
 
 
 def test_the_cli_judges_a_60_fps_video_every_2nd_frame_unless_told(tmp_path):

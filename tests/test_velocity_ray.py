@@ -147,8 +147,10 @@ def test_the_frames_measured_spread_tolerates_rigid_parallax():
     _, rigid_only = _terrain_run(5.0, mover=False)
     _, rigid_without_spread = _terrain_run(0.0, mover=False)
     assert found >= 0.9  # measured 1.0
-    assert with_mover <= 0.7 and rigid_only <= 0.8  # measured 0.56 and 0.56
-    assert rigid_without_spread >= 1.5  # measured 2.33
+    # measured 0.33 and 0.22 (0.56 and 0.56 while tracked movers always voted for the plane)
+    assert with_mover <= 0.5 and rigid_only <= 0.5
+    assert rigid_without_spread >= 1.5  # measured 2.22 (2.33)
+    assert rigid_without_spread >= 4 * rigid_only
 
 
 def _slowing_mover_found(prior: bool) -> float:

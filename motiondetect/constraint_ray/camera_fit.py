@@ -32,7 +32,7 @@ from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
     MEDIAN_TO_SIGMA,
     explained_share,
-    fit_homography,
+    fit_homography_without,
     plane_residual,
     residual_spread,
     samples,
@@ -240,6 +240,7 @@ def fit_camera(
     config: FitConfig,
     previous_epipole: np.ndarray | None = None,
     reference_sharpness: float | None = None,
+    movers: np.ndarray | None = None,
 ) -> CameraFit:
     """Fit the observer's motion to one frame's velocity field.
 
@@ -250,6 +251,10 @@ def fit_camera(
     previous_epipole : (3,) ndarray, optional
     reference_sharpness : float, optional
         The recent frames' median :func:`sharpness`; none: no blur test.
+    movers : (h, w) ndarray of bool, optional
+        Where known movers are expected (the confirmed tracks' predicted
+        boxes): their samples do not vote for the plane when the rest are
+        likelier without them (``config.exclude_tracks``).
 
     Returns
     -------
@@ -258,10 +263,7 @@ def fit_camera(
     """
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
-    homography, inliers = fit_homography(
-        points, velocity, config.ransac_px,
-        outlier_px=config.max_speed_px, tight_px=config.tight_px, seed=config.seed,
-    )  # fmt: skip
+    homography, inliers = _plane(points, velocity, movers, config)
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
     residual = sampled = None
@@ -285,13 +287,41 @@ def fit_camera(
     noise = float(np.median(magnitude[inliers]) * MEDIAN_TO_SIGMA) if inliers.any() else 0.0
     epipole = None
     if config.parallax:
-        big = magnitude > config.parallax_sigmas * max(noise, 0.05)
-        epipole = fit_epipole(
-            points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape,
-            config.min_parallax_blocks, previous_epipole, np.random.default_rng(config.seed),
-        )  # fmt: skip
+        epipole = _epipole(field, points, sampled, magnitude, noise, config, previous_epipole)
     spread = residual_spread(magnitude)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         change_noise, sharp, energy, float(np.median(vector_length(velocity - sampled))),
+    )  # fmt: skip
+
+
+def _plane(
+    points: np.ndarray, velocity: np.ndarray, movers: np.ndarray | None, config: FitConfig
+) -> tuple[np.ndarray | None, np.ndarray]:
+    """RANSAC's plane and its inliers, the samples on ``movers`` not voting
+    when the rest are likelier without them."""
+    on_movers = np.zeros(len(points), bool)
+    if movers is not None and config.exclude_tracks:
+        on_movers = movers[points[:, 1].astype(int), points[:, 0].astype(int)]
+    return fit_homography_without(
+        points, velocity, on_movers, config.ransac_px, outlier_px=config.max_speed_px,
+        tight_px=config.tight_px, seed=config.seed, min_rest=config.min_inlier_share,
+    )  # fmt: skip
+
+
+def _epipole(
+    field: VelocityField,
+    points: np.ndarray,
+    sampled: np.ndarray,
+    magnitude: np.ndarray,
+    noise: float,
+    config: FitConfig,
+    previous: np.ndarray | None,
+) -> np.ndarray | None:
+    """The epipole that the samples' large residuals (``sampled``, of
+    length ``magnitude``) point to or from."""
+    big = magnitude > config.parallax_sigmas * max(noise, 0.05)
+    return fit_epipole(
+        points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape,
+        config.min_parallax_blocks, previous, np.random.default_rng(config.seed),
     )  # fmt: skip

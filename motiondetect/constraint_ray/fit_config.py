@@ -90,6 +90,15 @@ class FitConfig:
         at infinity) more often than it explained real parallax, and cost
         recall everywhere (docs/detectors.md). Without it the ray of every
         point is the plane's velocity alone, and any residual is tested.
+    exclude_tracks : bool
+        The samples inside the confirmed tracks' predicted boxes do not vote
+        for the plane when the rest of the samples are likelier without
+        them (:func:`~.plane.fit_homography_without`), as long as at least
+        ``min_inlier_share`` of the samples remains (a plane explaining
+        fewer could not be judged anyway). Off: every sample votes, and a
+        mover the camera follows takes the plane once it covers about as
+        much of the view as the background (docs/detectors.md, "Tracked
+        movers do not vote for the camera's motion").
     focal_share : float
         Lens prior: the focal length as a share of the frame's long side
         (0.75: a phone's main camera, 26 mm equivalent), for decomposing
@@ -116,6 +125,7 @@ class FitConfig:
     aperture_noise: float = 1.0
     edge_px: float = 4.0
     parallax: bool = False
+    exclude_tracks: bool = True
     focal_share: float = 0.75
     seed: int = 0
 

@@ -148,6 +148,65 @@ def fit_homography(
     return homography, error < threshold_px
 
 
+def fit_homography_without(
+    points: np.ndarray,
+    velocity: np.ndarray,
+    movers: np.ndarray,
+    threshold_px: float,
+    *,
+    outlier_px: float,
+    min_rest: float,
+    tight_px: float = 0.0,
+    seed: int = 0,
+) -> tuple[np.ndarray | None, np.ndarray]:
+    """:func:`fit_homography`, with the samples on known movers not voting.
+
+    Independent motion says nothing about the observer's: a mover the
+    camera follows, once it covers about as much of the view as the
+    background, is the likelier plane and takes the fit (the background is
+    then flagged and the mover missed); a slower one pulls the plane toward
+    itself. Where the plane fitted to all the samples explains those on
+    ``movers`` at least as well as the rest (a larger share of them are its
+    inliers: it is their plane as much as the scene's), the plane is fitted
+    again without them, and kept when the rest of the samples are likelier
+    under it (:func:`mixture_log_likelihood`, the rest's errors under both
+    planes). Movers the plane already leaves out, and flagged water or
+    parallax (worse explained than the scene), keep their vote: leaving
+    them out would only let the plane leave them more.
+
+    Parameters
+    ----------
+    points, velocity : (N, 2) ndarray
+        As :func:`fit_homography`.
+    movers : (N,) ndarray of bool
+        Samples on known movers (the confirmed tracks' predicted boxes).
+    min_rest : float
+        The share of the samples that must remain (``FitConfig.min_inlier_share``);
+        below it the plane is fitted to all of them, as without ``movers``.
+
+    Returns
+    -------
+    homography : (3, 3) ndarray or None
+    inliers : (N,) ndarray of bool
+        Every sample within ``threshold_px`` of the plane kept, movers too.
+    """
+    kwargs = {"outlier_px": outlier_px, "tight_px": tight_px, "seed": seed}
+    homography, inliers = fit_homography(points, velocity, threshold_px, **kwargs)
+    rest = ~movers
+    if homography is None or not movers.any() or rest.mean() < min_rest:
+        return homography, inliers
+    if inliers[movers].mean() < inliers[rest].mean():
+        return homography, inliers  # the movers do not carry the plane
+    alone, _ = fit_homography(points[rest], velocity[rest], threshold_px, **kwargs)
+    if alone is None:
+        return homography, inliers
+    errors = [plane_error(points[rest], velocity[rest], h) for h in (homography, alone)]
+    with_movers, without = mixture_log_likelihood(np.stack(errors), outlier_px)
+    if without <= with_movers:
+        return homography, inliers
+    return alone, plane_error(points, velocity, alone) < threshold_px
+
+
 def residual_spread(magnitude: np.ndarray) -> float:
     """Robust sigma of residual vectors from their lengths (any shape): the
     median of a 2-D Gaussian's length over sqrt(2 ln 2). 0 when empty."""

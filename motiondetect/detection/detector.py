@@ -264,11 +264,12 @@ class MotionDetector:
             self._reset_judging()
             self._picture = flow.picture
         reference = float(np.median(self._sharpness)) if self._sharpness else None
-        fit = fit_camera(flow, self.fit_config, self._epipole, reference)
+        predicted = self.tracker.predicted_mask(flow.shape)  # where confirmed tracks should be
+        fit = fit_camera(flow, self.fit_config, self._epipole, reference, predicted)
         if self.fit_config.blur_ratio > 0:  # the blur test's reference
             self._sharpness.append(fit.sharpness)
         self._epipole = fit.epipole
-        tracked = self.tracker.predicted_mask(flow.shape) if self.tracker.config.prior else None
+        tracked = predicted if self.tracker.config.prior else None
         flow = flow.judged(fit, tracked, self._interval(time_s))
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         judged = [out.camera for out in outputs.values() if out.camera is not None]
@@ -284,7 +285,7 @@ class MotionDetector:
         overlay = self._overlay.update(flow, fit, tolerance)
         if overlay is not None and union.any():
             union = without_overlay(union, overlay, flow.patch_px)
-        unlike = self._remembered(flow, fit, union)
+        unlike = self._remembered(flow, fit, union, predicted)
         objects = group_objects(union, flow.velocity_px, track, self._support(fit, union), unlike)
         objects = assigned_objects(objects, flow, fit, track.layer_sigmas, track.min_area_share)
         objects = self._rigid.without_rigid(objects)
@@ -339,16 +340,18 @@ class MotionDetector:
         longer = self._history.changed(track.support_sigmas, CHANGE_BOX)
         return changed if longer is None else changed | (longer & slow)
 
-    def _remembered(self, flow: VelocityField, fit: CameraFit, flagged: np.ndarray):
+    def _remembered(
+        self, flow: VelocityField, fit: CameraFit, flagged: np.ndarray, tracked: np.ndarray | None
+    ):
         """Where the frame differs from the remembered background (None: no memory,
         or nothing known yet); it then learns this frame outside the flagged
-        pixels and the boxes where confirmed tracks are predicted."""
+        pixels and ``tracked``, the boxes where confirmed tracks are predicted
+        (a mover missed this frame)."""
         if self._background is None:
             return None
         sigmas = self.tracker.config.support_sigmas
         differs = self._background.differs(flow, fit, sigmas, CHANGE_BOX)
         changed = None if fit.plane_difference is None else fit.image_changed(sigmas, CHANGE_BOX)
-        tracked = self.tracker.predicted_mask(flow.shape)  # a mover missed this frame
         self._background.learn(flagged if tracked is None else flagged | tracked, changed)
         return differs
 
