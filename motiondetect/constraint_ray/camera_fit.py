@@ -253,8 +253,8 @@ def fit_camera(
         The recent frames' median :func:`sharpness`; none: no blur test.
     movers : (h, w) ndarray of bool, optional
         Where known movers are expected (the confirmed tracks' predicted
-        boxes): their samples do not vote for the plane when the rest are
-        likelier without them (``config.exclude_tracks``).
+        boxes): their samples stop voting for the plane where they carry it
+        (``config.exclude_tracks``, :func:`~.plane.fit_homography_without`).
 
     Returns
     -------
@@ -299,7 +299,7 @@ def _plane(
     points: np.ndarray, velocity: np.ndarray, movers: np.ndarray | None, config: FitConfig
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """RANSAC's plane and its inliers, the samples on ``movers`` not voting
-    when the rest are likelier without them."""
+    where they carry the plane (:func:`~.plane.fit_homography_without`)."""
     on_movers = np.zeros(len(points), bool)
     if movers is not None and config.exclude_tracks:
         on_movers = movers[points[:, 1].astype(int), points[:, 0].astype(int)]

@@ -91,11 +91,12 @@ class FitConfig:
         recall everywhere (docs/detectors.md). Without it the ray of every
         point is the plane's velocity alone, and any residual is tested.
     exclude_tracks : bool
-        The samples inside the confirmed tracks' predicted boxes do not vote
-        for the plane when the rest of the samples are likelier without
-        them (:func:`~.plane.fit_homography_without`), as long as at least
-        ``min_inlier_share`` of the samples remains (a plane explaining
-        fewer could not be judged anyway). Off: every sample votes, and a
+        The samples inside the confirmed tracks' predicted boxes stop voting
+        for the plane where they carry it (the plane fitted to all explains
+        them at least as well as the rest) and the rest of the samples are
+        likelier without them (:func:`~.plane.fit_homography_without`), as
+        long as at least ``min_inlier_share`` of the samples remains (a
+        plane explaining fewer could not be judged anyway). Off: every sample votes, and a
         mover the camera follows takes the plane once it covers about as
         much of the view as the background (docs/detectors.md, "Tracked
         movers do not vote for the camera's motion").
