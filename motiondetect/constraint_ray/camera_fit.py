@@ -32,7 +32,9 @@ from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
     MEDIAN_TO_SIGMA,
     explained_share,
+    fit_homography,
     fit_homography_without,
+    plane_error,
     plane_residual,
     residual_spread,
     samples,
@@ -93,6 +95,11 @@ class CameraFit:
         px/frame: the image's motion without the measurement's noise, which
         ``median_speed_px`` includes (DIS's noise alone gives a still camera
         a median speed of about 1.2 sigmas).
+    voted : (3, 3) ndarray of float64 or None
+        The plane all the samples vote for, before known movers or an
+        occluder are left out (:mod:`.layer_order` tests its layer).
+    voted_inliers : (N,) ndarray of bool or None
+        Its RANSAC inliers among the samples (:func:`~.plane.samples`).
 
     Derived maps that several detectors read (:meth:`image_changed`,
     :meth:`residual_length`) are computed once per fit and kept.
@@ -112,6 +119,8 @@ class CameraFit:
     sharpness: float = 0.0
     aperture_energy: float = 0.0
     plane_speed_px: float = 0.0
+    voted: np.ndarray | None = None
+    voted_inliers: np.ndarray | None = None
     _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def difference_sigma(self) -> float:
@@ -241,6 +250,7 @@ def fit_camera(
     previous_epipole: np.ndarray | None = None,
     reference_sharpness: float | None = None,
     movers: np.ndarray | None = None,
+    occluder: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> CameraFit:
     """Fit the observer's motion to one frame's velocity field.
 
@@ -252,9 +262,12 @@ def fit_camera(
     reference_sharpness : float, optional
         The recent frames' median :func:`sharpness`; none: no blur test.
     movers : (h, w) ndarray of bool, optional
-        Where known movers are expected (the confirmed tracks' predicted
-        boxes): their samples stop voting for the plane where they carry it
-        (``config.exclude_tracks``, :func:`~.plane.fit_homography_without`).
+        Where the confirmed tracks are predicted: their samples stop voting
+        where they carry the plane (:func:`~.plane.fit_homography_without`).
+    occluder : ((3, 3) ndarray, (3, 3) ndarray), optional
+        The last motions of a mover in front that carried the plane and of
+        the layer behind it (:class:`~.layer_order.LayerOrder`): the samples
+        nearer the first stop voting, in place of the tracks'.
 
     Returns
     -------
@@ -263,7 +276,7 @@ def fit_camera(
     """
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
-    homography, inliers = _plane(points, velocity, movers, config)
+    homography, inliers, voted, voters = _plane(points, velocity, movers, occluder, config)
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
     residual = sampled = None
@@ -274,39 +287,66 @@ def fit_camera(
         sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
         energy = (config.aperture_noise * change_noise) ** 2
         share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
-    cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
-    sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0  # the blur test is off
-    blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
+    cut, sharp, blurred = _cut_and_blur(field, difference, reference_sharpness, config)
     reason = _reason(homography, share, speed, field.searched_px, cut, blurred, config)
     edge = config.edge_px + speed
     if reason:
         return CameraFit(
-            homography, None, 0.0, share, None, reason, speed, edge_band_px=edge, sharpness=sharp
-        )
+            homography, None, 0.0, share, None, reason, speed, edge_band_px=edge, sharpness=sharp,
+            voted=voted[0], voted_inliers=voted[1],
+        )  # fmt: skip
     magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
     noise = float(np.median(magnitude[inliers]) * MEDIAN_TO_SIGMA) if inliers.any() else 0.0
-    epipole = None
-    if config.parallax:
-        epipole = _epipole(field, points, sampled, magnitude, noise, config, previous_epipole)
-    spread = residual_spread(magnitude)
+    epipole = _epipole(field, points, sampled, magnitude, noise, config, previous_epipole)
+    spread = residual_spread(magnitude[voters])  # movers left out of the fit: of the spread too
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         change_noise, sharp, energy, float(np.median(vector_length(velocity - sampled))),
+        voted[0], voted[1],
     )  # fmt: skip
+
+
+def _cut_and_blur(
+    field: VelocityField,
+    difference: np.ndarray | None,
+    reference_sharpness: float | None,
+    config: FitConfig,
+) -> tuple[float, float, bool]:
+    """The mean plane difference (a cut's test), the frame's sharpness (0
+    while the blur test is off) and whether it is blurred against the
+    ``reference_sharpness``."""
+    cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
+    sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0
+    blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
+    return cut, sharp, blurred
 
 
 def _plane(
-    points: np.ndarray, velocity: np.ndarray, movers: np.ndarray | None, config: FitConfig
-) -> tuple[np.ndarray | None, np.ndarray]:
-    """RANSAC's plane and its inliers, the samples on ``movers`` not voting
-    where they carry the plane (:func:`~.plane.fit_homography_without`)."""
+    points: np.ndarray,
+    velocity: np.ndarray,
+    movers: np.ndarray | None,
+    occluder: tuple[np.ndarray, np.ndarray] | None,
+    config: FitConfig,
+) -> tuple[np.ndarray | None, np.ndarray, tuple[np.ndarray | None, np.ndarray], np.ndarray]:
+    """RANSAC's plane and its inliers, the samples on ``movers`` (with
+    ``occluder``, the samples that move with it instead) not voting where they carry the plane
+    (:func:`~.plane.fit_homography_without`); that voted plane with its
+    inliers; and the samples the plane kept was fitted to (all of them
+    unless movers were left out)."""
+    kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
+    voted = fit_homography(points, velocity, config.ransac_px, **kwargs)
     on_movers = np.zeros(len(points), bool)
-    if movers is not None and config.exclude_tracks:
+    if occluder is not None:  # the tracks found while it held the plane lie off it
+        front, behind = (plane_error(points, velocity, h) for h in occluder)
+        on_movers = front < behind
+    elif movers is not None and config.exclude_tracks:
         on_movers = movers[points[:, 1].astype(int), points[:, 0].astype(int)]
-    return fit_homography_without(
-        points, velocity, on_movers, config.ransac_px, outlier_px=config.max_speed_px,
-        tight_px=config.tight_px, seed=config.seed, min_rest=config.min_inlier_share,
+    homography, inliers = fit_homography_without(
+        points, velocity, on_movers, config.ransac_px, min_rest=config.min_inlier_share,
+        voted=voted, **kwargs,
     )  # fmt: skip
+    voters = ~on_movers if homography is not voted[0] else np.ones(len(points), bool)
+    return homography, inliers, voted, voters
 
 
 def _epipole(
@@ -319,7 +359,9 @@ def _epipole(
     previous: np.ndarray | None,
 ) -> np.ndarray | None:
     """The epipole that the samples' large residuals (``sampled``, of
-    length ``magnitude``) point to or from."""
+    length ``magnitude``) point to or from; None without ``config.parallax``."""
+    if not config.parallax:
+        return None
     big = magnitude > config.parallax_sigmas * max(noise, 0.05)
     return fit_epipole(
         points[big], sampled[big], 2.0 * max(noise, 0.1), field.shape,

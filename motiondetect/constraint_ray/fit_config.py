@@ -100,6 +100,24 @@ class FitConfig:
         mover the camera follows takes the plane once it covers about as
         much of the view as the background (docs/detectors.md, "Tracked
         movers do not vote for the camera's motion").
+    occluder_frames : int
+        Frames on which the plane's own layer must be seen in front of a
+        second layer (its outline carries the other's boundary;
+        :mod:`~.layer_order`) before the plane's samples stop voting for
+        it, as a tracked mover's do: a mover the camera follows that fills
+        about half the view from the first frame, and so carries the plane
+        before any track exists (0: off). Frames that decide nothing do
+        not count; one that puts the other layer in front, or leaves fewer
+        than ``min_inlier_share`` of the samples off the plane, starts
+        again. On the shared real clips no frame reaches two.
+    occluder_margin : float
+        How much better one plane's motion must predict the layers'
+        boundary than the other's (a share of the pixels compared) for a
+        frame to decide.
+    occluder_coherence : float
+        Share of the samples off the plane that one second plane must
+        explain for the two to be tested as layers (water, smoke and the
+        parallax of many depths are not one layer).
     focal_share : float
         Lens prior: the focal length as a share of the frame's long side
         (0.75: a phone's main camera, 26 mm equivalent), for decomposing
@@ -127,6 +145,9 @@ class FitConfig:
     edge_px: float = 4.0
     parallax: bool = False
     exclude_tracks: bool = True
+    occluder_frames: int = 4
+    occluder_margin: float = 0.3
+    occluder_coherence: float = 0.7
     focal_share: float = 0.75
     seed: int = 0
 
@@ -149,8 +170,9 @@ class FitConfig:
                 "edge_px",
                 "focal_share",
                 "seed",
+                "occluder_frames",
             ),
-            shares=("max_flagged_share", "blur_ratio"),
+            shares=("max_flagged_share", "blur_ratio", "occluder_margin", "occluder_coherence"),
         )
         if self.min_inlier_share >= 1:
             raise ValueError(f"min_inlier_share must be below 1, got {self.min_inlier_share}")

@@ -158,19 +158,20 @@ def fit_homography_without(
     min_rest: float,
     tight_px: float = 0.0,
     seed: int = 0,
+    voted: tuple[np.ndarray | None, np.ndarray] | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """:func:`fit_homography`, with the samples on known movers not voting.
 
     Independent motion says nothing about the observer's: a mover the
     camera follows, once it covers about as much of the view as the
-    background, is the likelier plane and takes the fit (the background is
-    then flagged and the mover missed); a slower one pulls the plane toward
-    itself. Where the plane fitted to all the samples explains those on
-    ``movers`` at least as well as the rest (a larger share of them are its
-    inliers: it is their plane as much as the scene's), the plane is fitted
-    again without them, and kept when the rest of the samples are likelier
-    under it (:func:`mixture_log_likelihood`, the rest's errors under both
-    planes). Movers the plane already leaves out, and flagged water or
+    background, takes the fit (the background is then flagged and the mover
+    missed); a slower one pulls the plane toward itself. Where the plane
+    fitted to all the samples explains those on ``movers`` at least as well
+    as the rest (a larger share of them are its inliers: it is their plane
+    as much as the scene's), the plane is fitted again without them, and
+    kept when the rest of the samples are likelier under it
+    (:func:`mixture_log_likelihood`, the rest's errors under both planes).
+    Movers the plane already leaves out, and flagged water or
     parallax (worse explained than the scene), keep their vote: leaving
     them out would only let the plane leave them more.
 
@@ -183,6 +184,8 @@ def fit_homography_without(
     min_rest : float
         The share of the samples that must remain (``FitConfig.min_inlier_share``);
         below it the plane is fitted to all of them, as without ``movers``.
+    voted : (homography, inliers), optional
+        :func:`fit_homography` of all the samples, when already computed.
 
     Returns
     -------
@@ -191,7 +194,7 @@ def fit_homography_without(
         Every sample within ``threshold_px`` of the plane kept, movers too.
     """
     kwargs = {"outlier_px": outlier_px, "tight_px": tight_px, "seed": seed}
-    homography, inliers = fit_homography(points, velocity, threshold_px, **kwargs)
+    homography, inliers = voted or fit_homography(points, velocity, threshold_px, **kwargs)
     rest = ~movers
     if homography is None or not movers.any() or rest.mean() < min_rest:
         return homography, inliers

@@ -24,6 +24,7 @@ import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
+from motiondetect.constraint_ray.layer_order import LayerOrder
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection import streaming
 from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
@@ -144,6 +145,7 @@ class MotionDetector:
         self.tracker = Tracker(track)
         self._history = ChangeHistory(track.support_frames)
         self._overlay = ScreenFixed(track.overlay_frames)
+        self._order = LayerOrder(self.fit_config)
         rate = track.background_rate
         self._background = BackgroundMemory(rate, track.background_frames) if rate > 0 else None
         if measure == "velocity":
@@ -175,6 +177,7 @@ class MotionDetector:
         for det in self.detectors.values():
             det.reset()
         self._epipole, self._recent = None, []
+        self._order.reset()
         self._sharpness.clear()
         self._history.reset()
         self._rigid.reset()
@@ -263,12 +266,8 @@ class MotionDetector:
         if flow.picture != self._picture:  # black bars found or lit: other work pixels
             self._reset_judging()
             self._picture = flow.picture
-        reference = float(np.median(self._sharpness)) if self._sharpness else None
         predicted = self.tracker.predicted_mask(flow.shape)  # where confirmed tracks should be
-        fit = fit_camera(flow, self.fit_config, self._epipole, reference, predicted)
-        if self.fit_config.blur_ratio > 0:  # the blur test's reference
-            self._sharpness.append(fit.sharpness)
-        self._epipole = fit.epipole
+        fit = self._fitted(flow, predicted)
         tracked = predicted if self.tracker.config.prior else None
         flow = flow.judged(fit, tracked, self._interval(time_s))
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
@@ -296,6 +295,8 @@ class MotionDetector:
         empty = np.zeros((GRID, GRID), bool)
         if reason:
             self.tracker.coast(cut=reason == CUT)  # no track is predicted across a cut
+            if reason == CUT:
+                self._order.reset()
             return FrameResult(
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )
@@ -318,6 +319,19 @@ class MotionDetector:
             index, time_s, regions, flagged, known, None, flow, outputs,
             mask=mask, camera=camera, overlay=overlay,
         )  # fmt: skip
+
+    def _fitted(self, flow: VelocityField, predicted: np.ndarray) -> CameraFit:
+        """The frame's :func:`fit_camera`, the ``predicted`` tracks' samples or
+        an occluder's (:class:`LayerOrder`) left out where they carry the plane;
+        the blur reference, the epipole and the layer order learn from it."""
+        reference = float(np.median(self._sharpness)) if self._sharpness else None
+        occluder = self._order.occluder  # a mover that fills the view and took the plane
+        fit = fit_camera(flow, self.fit_config, self._epipole, reference, predicted, occluder)
+        self._order.update(flow, fit.voted, fit.voted_inliers, fit.edge_band_px)
+        if self.fit_config.blur_ratio > 0:  # the blur test's reference
+            self._sharpness.append(fit.sharpness)
+        self._epipole = fit.epipole
+        return fit
 
     def _interval(self, time_s: float) -> float | None:
         """Seconds since the last frame measured; None when not known or not

@@ -1,0 +1,79 @@
+r"""Which layer the layer-order test puts in front, frame by frame, on every clip.
+
+    python benchmarks/layer_order.py davis,ucsd,sample,fox,otb,sbi
+
+The test behind ``[fit] occluder_frames`` (``constraint_ray/layer_order.py``)
+finds a mover that fills about half the view from the first frame, whose
+motion the plane takes: its outline carries the background's boundary.
+A clip where no mover does must never reach ``occluder_frames`` frames in a
+row that put the plane's own layer in front. For each clip this prints the
+verdicts, one character a frame (``+`` the plane's layer in front, ``-``
+the other's, ``.`` undecided or not tested), and the longest run of ``+``
+with the undecided frames skipped (the detector also starts again after
+``occluder_frames`` frames without a ``+``, so its runs are at most this).
+The plane here is the one all the samples vote for, each frame alone (no
+tracks), as the detector's is before it has any.
+"""
+
+from __future__ import annotations
+
+import argparse
+from multiprocessing import Pool
+
+import compare
+import cv2
+
+from motiondetect.constraint_ray.camera_fit import fit_camera
+from motiondetect.constraint_ray.fit_config import FitConfig
+from motiondetect.constraint_ray.layer_order import LayerOrder
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.video import open_source
+
+
+def verdicts(job: tuple[str, object]) -> tuple[str, list[int]]:
+    name, source = job
+    config = FitConfig()
+    measuring, order, out = MotionDetector("both"), LayerOrder(config), []
+    with open_source(source) as frames:
+        for frame in frames:
+            image = frame.image
+            if image.ndim == 2:
+                image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+            field = measuring.measure_frame(image)
+            if field is None or not hasattr(field, "velocity_px"):
+                order.reset()
+                continue
+            fit = fit_camera(field, config)
+            out.append(order.update(field, fit.voted, fit.voted_inliers, fit.edge_band_px))
+    return name, out
+
+
+def longest_run(seq: list[int]) -> int:
+    """Longest run of +1, zeros skipped, -1 starting again (the detector's count)."""
+    best = run = 0
+    for v in seq:
+        run = run + 1 if v > 0 else (0 if v < 0 else run)
+        best = max(best, run)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sample,fox,otb,sbi")
+    parser.add_argument("--jobs", type=int, default=2)
+    args = parser.parse_args()
+    groups = args.datasets.split(",")
+    jobs = [
+        (name, source)
+        for name, source, _, _ in compare.sequences(quick=False)
+        if any(name.startswith(g) for g in groups)
+    ]
+    with Pool(args.jobs) as pool:
+        results = pool.map(verdicts, jobs, chunksize=1)
+    for name, seq in results:
+        marks = "".join("+" if v > 0 else "-" if v < 0 else "." for v in seq)
+        print(f"{name:28s} longest run {longest_run(seq)}  {marks}")
+
+
+if __name__ == "__main__":
+    main()
