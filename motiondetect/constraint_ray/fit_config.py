@@ -102,14 +102,14 @@ class FitConfig:
         movers do not vote for the camera's motion").
     occluder_frames : int
         Frames on which the plane's own layer must be seen in front of a
-        second layer (its outline carries the other's boundary;
-        :mod:`~.layer_order`) before the plane's samples stop voting for
-        it, as a tracked mover's do: a mover the camera follows that fills
-        about half the view from the first frame, and so carries the plane
-        before any track exists (0: off). Frames that decide nothing do
-        not count; one that puts the other layer in front, or leaves fewer
-        than ``min_inlier_share`` of the samples off the plane, starts
-        again. On the shared real clips no frame reaches two.
+        second layer (the boundary between them moves with it;
+        :mod:`~.layer_order`) before the samples that move with it stop
+        voting, as a tracked mover's do: a mover the camera follows that
+        fills about half the view from the first frame, and so carries the
+        plane before any track exists (0: off). Frames that decide nothing
+        do not count; one that puts the other layer in front, or as many
+        frames without one that puts the plane's there, start again. On
+        the shared real clips no run is longer than two.
     occluder_margin : float
         How much better one plane's motion must predict the layers'
         boundary than the other's (a share of the pixels compared) for a

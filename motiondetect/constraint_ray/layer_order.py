@@ -39,9 +39,8 @@ from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 #: Labels are compared on every ``_STEP``-th work pixel each way.
 _STEP = 2
-#: Fewest compared pixels, as a share of the frame, for a frame to decide:
-#: about a 1 px band around a tenth of the view (below it the predictions
-#: differ only in noise).
+#: Fewest compared pixels, as a share of those labelled, for a frame to
+#: decide (192 of a 320x240 frame's): fewer are a few stray labels.
 _MIN_EVIDENCE_SHARE = 0.0025
 #: A label outside the frame, moved in from beyond its edge.
 _OUTSIDE = 2
