@@ -329,10 +329,10 @@ def _plane(
     config: FitConfig,
 ) -> tuple[np.ndarray | None, np.ndarray, tuple[np.ndarray | None, np.ndarray], np.ndarray]:
     """RANSAC's plane and its inliers, the samples on ``movers`` (with
-    ``occluder``, the samples that move with it instead) not voting where they carry the plane
-    (:func:`~.plane.fit_homography_without`); that voted plane with its
-    inliers; and the samples the plane kept was fitted to (all of them
-    unless movers were left out)."""
+    ``occluder``, those nearer its motion instead) not voting where they
+    carry the plane (:func:`~.plane.fit_homography_without`); the plane all
+    samples vote for, with its inliers; and the samples the plane kept was
+    fitted to (all of them unless it is the refit without the movers)."""
     kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
     voted = fit_homography(points, velocity, config.ransac_px, **kwargs)
     on_movers = np.zeros(len(points), bool)

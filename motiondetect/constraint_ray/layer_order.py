@@ -35,7 +35,7 @@ import numpy as np
 
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import plane_error, samples
-from motiondetect.measurement.dense_flow import VelocityField, vector_length
+from motiondetect.measurement.dense_flow import VelocityField
 
 #: Labels are compared on every ``_STEP``-th work pixel each way.
 _STEP = 2
@@ -94,13 +94,9 @@ def follows_second(
     (ceil(h / step), ceil(w / step)) ndarray of bool
     """
     grid = field.pixel_grid[::_STEP, ::_STEP]
-    velocity = field.velocity_px[::_STEP, ::_STEP]
     shape = grid.shape[:2]
-    points = grid.reshape(-1, 1, 2)
-    errors = []
-    for homography in (first, second):
-        previous = cv2.perspectiveTransform(points, homography).reshape(*shape, 2)
-        errors.append(vector_length(velocity - (grid - previous)))
+    points, velocity = grid.reshape(-1, 2), field.velocity_px[::_STEP, ::_STEP].reshape(-1, 2)
+    errors = [plane_error(points, velocity, h).reshape(shape) for h in (first, second)]
     return (errors[1] < errors[0]) & (errors[0] >= threshold_px)
 
 
