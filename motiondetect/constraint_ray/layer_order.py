@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.fit_config import FitConfig
-from motiondetect.constraint_ray.plane import plane_error, samples
+from motiondetect.constraint_ray.plane import plane_error, ransac_homography, samples
 from motiondetect.measurement.dense_flow import VelocityField
 
 #: Labels are compared on every ``_STEP``-th work pixel each way.
@@ -60,9 +60,7 @@ def second_plane(
     if len(points) < 8:
         return None, 0.0
     draws = int(np.ceil(np.log(1e-3) / np.log(1.0 - coherence**4)))
-    homography, _ = cv2.findHomography(
-        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=draws, confidence=0.999
-    )
+    homography = ransac_homography(points, velocity, threshold_px, draws, confidence=0.999)
     if homography is None:
         return None, 0.0
     return homography, float((plane_error(points, velocity, homography) < threshold_px).mean())
@@ -198,10 +196,10 @@ class LayerOrder:
         edge_px : float
             ``CameraFit.edge_band_px``.
         """
-        previous, self._previous = self._previous, field
         if self.config.occluder_frames <= 0 or voted is None:
             self.reset()
             return 0
+        previous, self._previous = self._previous, field
         verdict, layers = self._verdict(previous, field, voted, inliers, edge_px)
         self._decided(verdict, layers)
         return verdict

@@ -48,9 +48,17 @@ _MIN_SIGMA_PX = 0.01
 _EM_ROUNDS = 10
 
 
-def _ransac(points: np.ndarray, velocity: np.ndarray, threshold_px: float) -> np.ndarray | None:
+def ransac_homography(
+    points: np.ndarray,
+    velocity: np.ndarray,
+    threshold_px: float,
+    draws: int = 500,
+    confidence: float = 0.99,
+) -> np.ndarray | None:
+    """OpenCV's RANSAC homography from current ``points`` to where they were
+    (``points - velocity``), at most ``draws`` draws; None when none is found."""
     homography, _ = cv2.findHomography(
-        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=500, confidence=0.99
+        points, points - velocity, cv2.RANSAC, threshold_px, maxIters=draws, confidence=confidence
     )
     return homography
 
@@ -133,11 +141,11 @@ def fit_homography(
         inliers = np.empty_like(shuffled)
         inliers[order] = shuffled
         return homography, inliers
-    homography = _ransac(points, velocity, threshold_px)
+    homography = ransac_homography(points, velocity, threshold_px)
     if homography is None:
         return None, np.zeros(len(points), bool)
     error = plane_error(points, velocity, homography)
-    tight = _ransac(points, velocity, tight_px) if 0 < tight_px < threshold_px else None
+    tight = ransac_homography(points, velocity, tight_px) if 0 < tight_px < threshold_px else None
     if tight is not None:
         tight_error = plane_error(points, velocity, tight)
         loose_score, tight_score = mixture_log_likelihood(
