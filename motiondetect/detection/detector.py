@@ -36,7 +36,7 @@ from motiondetect.detection.objects import MovingObject, TrackConfig, group_obje
 from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.detection.rigid_depth import RigidDepth
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
-from motiondetect.detection.shaping import CHANGE_BOX
+from motiondetect.detection.shaping import CHANGE_BOX, InteriorMotion
 from motiondetect.detection.streaming import F
 from motiondetect.detection.tracking import Tracker
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
@@ -284,8 +284,7 @@ class MotionDetector:
         overlay = self._overlay.update(flow, fit, tolerance)
         if overlay is not None and union.any():
             union = without_overlay(union, overlay, flow.patch_px)
-        unlike = self._remembered(flow, fit, union, predicted)
-        objects = group_objects(union, flow.velocity_px, track, self._support(fit, union), unlike)
+        objects = self._grouped(flow, fit, union, self._remembered(flow, fit, union, predicted))
         objects = assigned_objects(objects, flow, fit, track.layer_sigmas, track.min_area_share)
         objects = self._rigid.without_rigid(objects)
         covered = sum(float(o.mask.mean()) for o in objects)
@@ -338,6 +337,19 @@ class MotionDetector:
         increasing (a source without times gives every frame 0)."""
         last, self._last_time = self._last_time, time_s
         return time_s - last if last is not None and time_s > last else None
+
+    def _grouped(
+        self, flow: VelocityField, fit: CameraFit, flagged: np.ndarray, unlike: np.ndarray | None
+    ) -> list[MovingObject]:
+        """:func:`group_objects` with the frame's support, its difference from
+        the remembered background (``unlike``) and what its motion says of a
+        plain mover's interior (:class:`InteriorMotion`)."""
+        track, support = self.tracker.config, self._support(fit, flagged)
+        motion = None
+        if support is not None and fit.residual_px is not None:
+            seen = track.support_sigmas * fit.difference_sigma()  # the support gate's level
+            motion = InteriorMotion(fit.residual_px, flow.structure, seen)
+        return group_objects(flagged, flow.velocity_px, track, support, unlike, flow.grey, motion)
 
     def _support(self, fit: CameraFit, flagged: np.ndarray) -> np.ndarray | None:
         """Where the image changed once the camera's motion is undone: over one

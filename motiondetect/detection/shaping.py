@@ -7,6 +7,8 @@ Pure functions on (h, w) uint8 0/1 masks at working size; the settings are
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
@@ -137,3 +139,166 @@ def trimmed(
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     cut = (labels == largest).astype(np.uint8)
     return cut if cut.sum() >= share * own.sum() else own
+
+
+#: Grey levels are binned by this shift (16 bins) for the appearance test of
+#: :func:`interior_grown`: coarse enough that a few hundred pixels fill them.
+_GREY_SHIFT = 4
+
+#: Width of the unflagged ring round a flagged region whose grey levels are
+#: taken as its background's (:func:`interior_grown`), work px: about one DIS
+#: patch, past the smear.
+RING_PX = 8
+
+
+@dataclass(frozen=True)
+class InteriorMotion:
+    """What the frame's motion says about a pixel the support gate took out.
+
+    Attributes
+    ----------
+    residual : (h, w, 2) ndarray of float32
+        Velocity minus the plane's, work px/frame.
+    tensor : (a, b, c) of (h, w) ndarray of float32
+        :func:`~motiondetect.measurement.aperture.structure_tensor` over the
+        flow's patch, grey levels^2/px^2.
+    seen_level : float
+        The support gate's threshold, grey levels: a change of this size
+        would have been seen.
+    """
+
+    residual: np.ndarray
+    tensor: tuple[np.ndarray, ...]
+    seen_level: float
+
+    def unseen_and_with(self, ys, xs, mover: np.ndarray) -> np.ndarray:
+        """(N,) bool at pixels ``(ys, xs)``: moving by its residual, the pixel
+        would have changed the image by less than ``seen_level`` (RMS of
+        ``grad I . r`` over the patch), and its residual is nearer ``mover``
+        ((N, 2), its region's) than the plane's (zero)."""
+        r = self.residual[ys, xs]
+        a, b, c = (t[ys, xs] for t in self.tensor)
+        change = np.sqrt(r[:, 0] ** 2 * a + 2 * r[:, 0] * r[:, 1] * b + r[:, 1] ** 2 * c)
+        nearer = np.hypot(*(r - mover).T) < np.hypot(*r.T)
+        return (change < self.seen_level) & nearer
+
+
+def interior_grown(
+    supported: np.ndarray,
+    flagged: np.ndarray,
+    grey: np.ndarray | None,
+    inset_px: int,
+    motion: InteriorMotion | None = None,
+) -> np.ndarray:
+    """The supported pixels, and the flagged ones inside a plain mover.
+
+    A plain surface that moves barely changes the image, so the support gate
+    takes out a plain mover's interior, and no closing of a fixed size puts
+    back that of one filling much of the view. A flagged pixel the gate took
+    out joins when it lies ``inset_px`` inside its flagged region (DIS's
+    smear is a band along its edge), inside the convex hull of the region's
+    supported pixels, its grey level likelier among those than in the
+    unflagged ring ``RING_PX`` wide round the region (16-bin histograms,
+    smoothed), and, with ``motion``, :meth:`InteriorMotion.unseen_and_with`.
+
+    Parameters
+    ----------
+    supported : (h, w) ndarray of uint8, 0/1
+        Flagged pixels near an image change (a subset of ``flagged``).
+    flagged : (h, w) ndarray of bool
+        What the detectors flagged.
+    grey : (h, w) ndarray of uint8 or None
+        The working frame (None: ``supported`` is returned as it is).
+    inset_px : int
+        Work px (0: ``supported`` is returned as it is).
+    motion : InteriorMotion, optional
+
+    Returns
+    -------
+    (h, w) ndarray of uint8, 0/1
+    """
+    if inset_px <= 0 or grey is None or not supported.any():
+        return supported
+    x, y, w, h = cv2.boundingRect(flagged.view(np.uint8))  # with its ring: all that is read
+    x0, y0 = max(x - RING_PX, 0), max(y - RING_PX, 0)
+    box = np.s_[y0 : y + h + RING_PX, x0 : x + w + RING_PX]
+    flag, own = flagged[box].view(np.uint8), supported[box] > 0
+    inner = cv2.erode(flag, np.ones((2 * inset_px + 1,) * 2, np.uint8))
+    inner[own] = 0  # nothing left without a gate: every flagged pixel is supported
+    if not inner.any():
+        return supported
+    count, labels, stats = components_with_stats(flag)
+    if count > np.iinfo(np.uint16).max:
+        return supported
+    labels = labels.astype(np.uint16, copy=False)
+    bins = grey[box] >> _GREY_SHIFT
+    likelier = _likelier_inside(labels, bins, flag, own, count)
+    grown_in = likelier.any(axis=1)
+    ys, xs = np.nonzero(inner & _hulls(labels, stats, own, grown_in))
+    keep = likelier[labels[ys, xs], bins[ys, xs]]
+    if motion is not None:
+        mover = _median_residuals(motion.residual[box], labels, stats, own, grown_in)
+        keep &= motion.unseen_and_with(ys + y0, xs + x0, mover[labels[ys, xs]])
+    grown = supported.copy()
+    grown[box][ys, xs] = keep
+    return grown
+
+
+def _likelier_inside(
+    labels: np.ndarray, bins: np.ndarray, flag: np.ndarray, own: np.ndarray, count: int
+) -> np.ndarray:
+    """(count, bins) bool: each grey-level bin likelier among the region's
+    supported pixels (``own``) than in the unflagged ring round it."""
+    inside = _histograms(labels, bins, own, count)
+    around = cv2.dilate(labels, np.ones((2 * RING_PX + 1,) * 2, np.uint8))
+    ring = _histograms(around, bins, (flag == 0) & (around > 0), count)
+    likelier = (_smoothed(inside) > _smoothed(ring)) & (inside.sum(axis=1) > 0)[:, None]
+    likelier[0] = False
+    return likelier
+
+
+def _median_residuals(
+    residual: np.ndarray, labels: np.ndarray, stats: np.ndarray, own: np.ndarray, chosen
+) -> np.ndarray:
+    """(count, 2): the median residual of each ``chosen`` region's supported pixels."""
+    out = np.zeros((len(stats), 2), np.float32)
+    for label in np.flatnonzero(chosen):
+        x, y, w, h = stats[label, :4]
+        part = (labels[y : y + h, x : x + w] == label) & own[y : y + h, x : x + w]
+        out[label] = np.median(residual[y : y + h, x : x + w][part], axis=0)
+    return out
+
+
+def _histograms(labels: np.ndarray, bins: np.ndarray, where: np.ndarray, count: int) -> np.ndarray:
+    """(count, bins) pixel counts of each label's grey-level bins over ``where``."""
+    size = 256 >> _GREY_SHIFT
+    keys = (labels.astype(np.int32) * size + bins)[where]
+    return np.bincount(keys, minlength=count * size).reshape(count, size).astype(np.float64)
+
+
+def _smoothed(counts: np.ndarray) -> np.ndarray:
+    """Each row of bin counts as probabilities: spread over neighbouring
+    bins (1/4, 1/2, 1/4) and half a count added to every bin."""
+    spread = 0.5 * counts + 0.5
+    spread[:, 1:] += 0.25 * counts[:, :-1]
+    spread[:, :-1] += 0.25 * counts[:, 1:]
+    spread[:, [0, -1]] += 0.25 * counts[:, [0, -1]]  # the edge bins keep their share
+    return spread / spread.sum(axis=1, keepdims=True)
+
+
+def _hulls(
+    labels: np.ndarray, stats: np.ndarray, supported: np.ndarray, chosen: np.ndarray
+) -> np.ndarray:
+    """(h, w) uint8 0/1: the convex hull of each ``chosen`` region's supported pixels."""
+    hull = np.zeros(labels.shape, np.uint8)
+    for label in np.flatnonzero(chosen):
+        x, y, w, h = stats[label, :4]
+        part = (labels[y : y + h, x : x + w] == label).view(np.uint8) & supported[
+            y : y + h, x : x + w
+        ]
+        outlines, _ = cv2.findContours(
+            part, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE, offset=(int(x), int(y))
+        )
+        if outlines:  # the hull of a point set is that of its parts' outlines
+            cv2.fillConvexPoly(hull, cv2.convexHull(np.concatenate(outlines)), 1)
+    return hull
