@@ -209,8 +209,8 @@ def test_a_real_swan_filling_half_the_view_is_found_by_the_layer_order():
     fills half the view (384x216 px; 43-45 % on every frame: the camera
     follows it). The swan takes the plane from the first frame, so without
     the layer order the water is flagged and the swan never is. Measured:
-    with it, the swan is covered 0.67-0.99 from frame 17 on, except 0.28-0.32
-    on frames 29-31, and the water flagged falls from 0.27 to 0.13 of it
+    with it, the swan is covered 0.70-0.99 from frame 17 on, except 0.28-0.31
+    on frames 29-31, and the water flagged falls from 0.40 to 0.13 of it
     over the last 20 frames; with ``occluder_frames = 0`` the swan is
     covered 0.00 on every frame."""
     seq = shared_path("davis", "blackswan")
