@@ -233,11 +233,11 @@ def interior_grown(
     labels = labels.astype(np.uint16, copy=False)
     bins = grey[box] >> _GREY_SHIFT
     likelier = _likelier_inside(labels, bins, flag, own, count)
-    grown_in = likelier.any(axis=1)
-    ys, xs = np.nonzero(inner & _hulls(labels, stats, own, grown_in))
+    residual = None if motion is None else motion.residual[box]
+    hull, mover = _hulls(labels, stats, own, likelier.any(axis=1), residual)
+    ys, xs = np.nonzero(inner & hull)
     keep = likelier[labels[ys, xs], bins[ys, xs]]
     if motion is not None:
-        mover = _median_residuals(motion.residual[box], labels, stats, own, grown_in)
         keep &= motion.unseen_and_with(ys + y0, xs + x0, mover[labels[ys, xs]])
     grown = supported.copy()
     grown[box][ys, xs] = keep
@@ -255,18 +255,6 @@ def _likelier_inside(
     likelier = (_smoothed(inside) > _smoothed(ring)) & (inside.sum(axis=1) > 0)[:, None]
     likelier[0] = False
     return likelier
-
-
-def _median_residuals(
-    residual: np.ndarray, labels: np.ndarray, stats: np.ndarray, own: np.ndarray, chosen
-) -> np.ndarray:
-    """(count, 2): the median residual of each ``chosen`` region's supported pixels."""
-    out = np.zeros((len(stats), 2), np.float32)
-    for label in np.flatnonzero(chosen):
-        x, y, w, h = stats[label, :4]
-        part = (labels[y : y + h, x : x + w] == label) & own[y : y + h, x : x + w]
-        out[label] = np.median(residual[y : y + h, x : x + w][part], axis=0)
-    return out
 
 
 def _histograms(labels: np.ndarray, bins: np.ndarray, where: np.ndarray, count: int) -> np.ndarray:
@@ -287,18 +275,24 @@ def _smoothed(counts: np.ndarray) -> np.ndarray:
 
 
 def _hulls(
-    labels: np.ndarray, stats: np.ndarray, supported: np.ndarray, chosen: np.ndarray
-) -> np.ndarray:
-    """(h, w) uint8 0/1: the convex hull of each ``chosen`` region's supported pixels."""
-    hull = np.zeros(labels.shape, np.uint8)
+    labels: np.ndarray,
+    stats: np.ndarray,
+    own: np.ndarray,
+    chosen: np.ndarray,
+    residual: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The convex hull of each ``chosen`` region's supported pixels (``own``),
+    (h, w) uint8 0/1, and their median ``residual``, (count, 2) (zeros
+    without one)."""
+    hull, medians = np.zeros(labels.shape, np.uint8), np.zeros((len(stats), 2), np.float32)
     for label in np.flatnonzero(chosen):
         x, y, w, h = stats[label, :4]
-        part = (labels[y : y + h, x : x + w] == label).view(np.uint8) & supported[
-            y : y + h, x : x + w
-        ]
+        part = (labels[y : y + h, x : x + w] == label) & own[y : y + h, x : x + w]
+        if residual is not None:
+            medians[label] = np.median(residual[y : y + h, x : x + w][part], axis=0)
         outlines, _ = cv2.findContours(
-            part, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE, offset=(int(x), int(y))
+            part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE, offset=(int(x), int(y))
         )
         if outlines:  # the hull of a point set is that of its parts' outlines
             cv2.fillConvexPoly(hull, cv2.convexHull(np.concatenate(outlines)), 1)
-    return hull
+    return hull, medians
