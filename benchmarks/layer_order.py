@@ -9,8 +9,8 @@ A clip where no mover does must never reach ``occluder_frames`` frames in a
 row that put the plane's own layer in front. For each clip this prints the
 verdicts, one character a frame (``+`` the plane's layer in front, ``-``
 the other's, ``.`` undecided or not tested), and the longest run of ``+``
-with the undecided frames skipped (the detector also starts again after
-``occluder_frames`` frames without a ``+``, so its runs are at most this).
+as the detector counts it: undecided frames skipped, a ``-`` or more than
+``occluder_frames`` frames without a ``+`` starting again.
 The plane here is the one all the samples vote for, each frame alone (no
 tracks), as the detector's is before it has any.
 """
@@ -48,11 +48,13 @@ def verdicts(job: tuple[str, object]) -> tuple[str, list[int]]:
     return name, out
 
 
-def longest_run(seq: list[int]) -> int:
-    """Longest run of +1, zeros skipped, -1 starting again (the detector's count)."""
-    best = run = 0
+def longest_run(seq: list[int], patience: int) -> int:
+    """Longest run of +1 as the detector counts it (``LayerOrder._decided``):
+    zeros skipped, -1 or more than ``patience`` frames without +1 starting again."""
+    best = run = since = 0
     for v in seq:
-        run = run + 1 if v > 0 else (0 if v < 0 else run)
+        since = 0 if v > 0 else since + 1
+        run = run + 1 if v > 0 else (0 if v < 0 or since > patience else run)
         best = max(best, run)
     return best
 
@@ -72,7 +74,8 @@ def main() -> None:
         results = pool.map(verdicts, jobs, chunksize=1)
     for name, seq in results:
         marks = "".join("+" if v > 0 else "-" if v < 0 else "." for v in seq)
-        print(f"{name:28s} longest run {longest_run(seq)}  {marks}")
+        run = longest_run(seq, FitConfig().occluder_frames)
+        print(f"{name:28s} longest run {run}  {marks}")
 
 
 if __name__ == "__main__":
