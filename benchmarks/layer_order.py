@@ -30,10 +30,10 @@ from motiondetect.detection.detector import MotionDetector
 from motiondetect.io.video import open_source
 
 
-def verdicts(job: tuple[str, object]) -> tuple[str, list[int]]:
+def verdicts(job: tuple[str, object]) -> tuple[str, list[int], int]:
     name, source = job
     config = FitConfig()
-    measuring, order, out = MotionDetector("both"), LayerOrder(config), []
+    measuring, order, out, longest = MotionDetector("both"), LayerOrder(config), [], 0
     with open_source(source) as frames:
         for frame in frames:
             image = frame.image
@@ -45,18 +45,8 @@ def verdicts(job: tuple[str, object]) -> tuple[str, list[int]]:
                 continue
             fit = fit_camera(field, config)
             out.append(order.update(field, fit.voted, fit.voted_inliers, fit.edge_band_px))
-    return name, out
-
-
-def longest_run(seq: list[int], patience: int) -> int:
-    """Longest run of +1 as the detector counts it (``LayerOrder._decided``):
-    zeros skipped, -1 or more than ``patience`` frames without +1 starting again."""
-    best = run = since = 0
-    for v in seq:
-        since = 0 if v > 0 else since + 1
-        run = run + 1 if v > 0 else (0 if v < 0 or since > patience else run)
-        best = max(best, run)
-    return best
+            longest = max(longest, order.run)
+    return name, out, longest
 
 
 def main() -> None:
@@ -72,10 +62,9 @@ def main() -> None:
     ]
     with Pool(args.jobs) as pool:
         results = pool.map(verdicts, jobs, chunksize=1)
-    for name, seq in results:
+    for name, seq, longest in results:
         marks = "".join("+" if v > 0 else "-" if v < 0 else "." for v in seq)
-        run = longest_run(seq, FitConfig().occluder_frames)
-        print(f"{name:28s} longest run {run}  {marks}")
+        print(f"{name:28s} longest run {longest}  {marks}")
 
 
 if __name__ == "__main__":

@@ -122,7 +122,7 @@ class FitConfig:
         explain for the two to be tested as layers (water, smoke and the
         parallax of many depths are not one layer). A background of water
         or motion-blurred ground is one layer whose flow DIS measures
-        loosely: 0.4-0.7 of it fits one plane (DAVIS blackswan and surf
+        loosely: 0.3-0.7 of it fits one plane (DAVIS blackswan and surf
         close up), so the bar is kept low and the outlines decide.
     focal_share : float
         Lens prior: the focal length as a share of the frame's long side

@@ -164,6 +164,11 @@ class LayerOrder:
         self._layers: tuple[np.ndarray, np.ndarray] | None = None  # on the last of them
 
     @property
+    def run(self) -> int:
+        """Frames counted so far toward ``occluder_frames``."""
+        return self._run
+
+    @property
     def occluder(self) -> tuple[np.ndarray, np.ndarray] | None:
         """The motions of the layer found in front and of the one behind it
         on the last frame that put it there (homographies, current to
