@@ -51,13 +51,15 @@ def verdicts(job: tuple[str, object]) -> tuple[str, list[int], int]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("datasets", help="comma-separated: davis,ucsd,sample,fox,otb,sbi")
+    parser.add_argument(
+        "datasets", help="comma-separated: davis,ucsd,sample,fox,otb,sbi,synth-rigid,synth-movers"
+    )
     parser.add_argument("--jobs", type=int, default=2)
     args = parser.parse_args()
     groups = args.datasets.split(",")
     jobs = [
         (name, source)
-        for name, source, _, _ in compare.sequences(quick=False)
+        for name, source, _, _ in compare.sequences(quick=False, synth="synth" in args.datasets)
         if any(name.startswith(g) for g in groups)
     ]
     with Pool(args.jobs) as pool:

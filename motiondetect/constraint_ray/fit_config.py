@@ -108,11 +108,12 @@ class FitConfig:
         fills about half the view from the first frame, and so carries the
         plane before any track exists (0: off). Frames that decide nothing
         do not count; one that puts the other layer in front, or as many
-        frames without one that puts the plane's there, start again. On
-        the shared real clips no run is longer than three
-        (``benchmarks/layer_order.py``); on the shared DAVIS clips cropped
-        so that the mover fills a third or half of the view, the true runs
-        last 5-48 frames.
+        frames without one that puts the plane's there, start again. Set
+        above the longest false run measured (``benchmarks/layer_order.py``):
+        3 on the shared real clips, 5 on the renders of ``synth_set.py``
+        (forward motion past near surfaces); on the shared DAVIS clips
+        cropped so that the mover fills a third or half of the view, the
+        true runs last 5-48 frames.
     occluder_margin : float
         How much better one plane's motion must predict the layers'
         boundary than the other's (a share of the pixels compared) for a
@@ -151,7 +152,7 @@ class FitConfig:
     edge_px: float = 4.0
     parallax: bool = False
     exclude_tracks: bool = True
-    occluder_frames: int = 5
+    occluder_frames: int = 6
     occluder_margin: float = 0.3
     occluder_coherence: float = 0.4
     focal_share: float = 0.75
