@@ -132,6 +132,11 @@ class CameraFit:
             self._memo["noise"] = difference_noise(self.plane_difference)
         return self._memo["noise"]
 
+    def change_level(self, sigmas: float) -> float:
+        """The grey-level change :meth:`image_changed` counts as seen:
+        ``sigmas`` times :meth:`difference_sigma`."""
+        return sigmas * self.difference_sigma()
+
     def image_changed(self, sigmas: float, box: int) -> np.ndarray:
         """Where the image changed beyond noise once the camera's motion is
         undone: the ``box``-px mean of ``plane_difference`` above ``sigmas``
@@ -139,8 +144,8 @@ class CameraFit:
         result: it is shared."""
         key = ("changed", sigmas, box)
         if key not in self._memo:
-            noise = self.difference_sigma()
-            self._memo[key] = cv2.blur(self.plane_difference, (box, box)) > sigmas * noise
+            level = self.change_level(sigmas)
+            self._memo[key] = cv2.blur(self.plane_difference, (box, box)) > level
         return self._memo[key]
 
     def determined_beyond(

@@ -347,7 +347,7 @@ class MotionDetector:
         track, support = self.tracker.config, self._support(fit, flagged)
         motion = None
         if support is not None and fit.residual_px is not None:
-            seen = track.support_sigmas * fit.difference_sigma()  # the support gate's level
+            seen = fit.change_level(track.support_sigmas)  # the support gate's level
             motion = InteriorMotion(fit.residual_px, flow.structure, seen)
         return group_objects(flagged, flow.velocity_px, track, support, unlike, flow.grey, motion)
 
