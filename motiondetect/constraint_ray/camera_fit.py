@@ -34,9 +34,9 @@ from motiondetect.constraint_ray.plane import (
     explained_share,
     fit_homography,
     fit_homography_without,
+    frame_spread,
     plane_error,
     plane_residual,
-    residual_spread,
     samples,
 )
 from motiondetect.measurement.aperture import determined
@@ -77,7 +77,9 @@ class CameraFit:
     spread_px : float
         Robust sigma of the plane residual over the whole frame (inliers or
         not), work px/frame: the noise plus the rigid parallax the plane
-        leaves (movers are a minority of the samples, so the median ignores them).
+        leaves (:func:`~.plane.frame_spread`: movers are mostly a minority
+        of the samples, so the median ignores them; tracked movers that
+        hold about half of them are left out).
     edge_band_px : float
         ``FitConfig.edge_px`` plus the median speed: the band along the
         frame edge where this frame's flow is extrapolated, work px.
@@ -303,11 +305,29 @@ def fit_camera(
     magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
     noise = float(np.median(magnitude[inliers]) * MEDIAN_TO_SIGMA) if inliers.any() else 0.0
     epipole = _epipole(field, points, sampled, magnitude, noise, config, previous_epipole)
-    spread = residual_spread(magnitude[voters])  # movers left out of the fit: of the spread too
+    spread = _spread(points, magnitude, voters, movers, config)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         change_noise, sharp, energy, float(np.median(vector_length(velocity - sampled))),
         voted[0], voted[1],
+    )  # fmt: skip
+
+
+def _spread(
+    points: np.ndarray,
+    magnitude: np.ndarray,
+    voters: np.ndarray,
+    movers: np.ndarray | None,
+    config: FitConfig,
+) -> float:
+    """:func:`~.plane.frame_spread` of the samples' residual lengths, the
+    samples in the tracks' predicted boxes (``movers``) known."""
+    on_movers = (
+        None if movers is None else movers[points[:, 1].astype(int), points[:, 0].astype(int)]
+    )
+    return frame_spread(
+        magnitude, voters, on_movers, config.rest_spread_quantile, config.rest_spread_ratio,
+        config.min_inlier_share,
     )  # fmt: skip
 
 

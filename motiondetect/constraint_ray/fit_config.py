@@ -125,6 +125,25 @@ class FitConfig:
         or motion-blurred ground is one layer whose flow DIS measures
         loosely: 0.3-0.7 of it fits one plane (DAVIS blackswan and surf
         close up), so the bar is kept low and the outlines decide.
+    rest_spread_quantile : float
+        Where the confirmed tracks' predicted boxes hold so much of the
+        view that their residual sets the spread (``CameraFit.spread_px``),
+        the spread is measured on the samples outside them instead: this
+        quantile of their residual lengths over a 2-D Gaussian's
+        (``sqrt(-2 ln(1 - q))`` sigmas), a high one so that the heavy tail
+        of the rigid parallax round the movers still passes
+        (:func:`~.plane.frame_spread`). A mover the camera follows close
+        up otherwise raises the ray's tolerance above its own residual
+        (DAVIS hockey at half the view: 20-44 px against the player's
+        3-9). 0: off.
+    rest_spread_ratio : float
+        The spread outside the boxes is kept only when it is below this
+        share of the spread over all the samples. At 0.5 the movers have
+        broken the median: under a Gaussian background they must hold
+        about 47 % of the samples to double it. Below that the median is
+        the background's, and leaving boxes out would only lower the
+        tolerance where a false track sits on near parallax (the samples'
+        fixation_waving, the fox clip).
     focal_share : float
         Lens prior: the focal length as a share of the frame's long side
         (0.75: a phone's main camera, 26 mm equivalent), for decomposing
@@ -155,6 +174,8 @@ class FitConfig:
     occluder_frames: int = 6
     occluder_margin: float = 0.3
     occluder_coherence: float = 0.4
+    rest_spread_quantile: float = 0.9
+    rest_spread_ratio: float = 0.5
     focal_share: float = 0.75
     seed: int = 0
 
@@ -179,7 +200,17 @@ class FitConfig:
                 "seed",
                 "occluder_frames",
             ),
-            shares=("max_flagged_share", "blur_ratio", "occluder_margin", "occluder_coherence"),
+            shares=(
+                "max_flagged_share",
+                "blur_ratio",
+                "occluder_margin",
+                "occluder_coherence",
+                "rest_spread_ratio",
+            ),
         )
+        if not 0 <= self.rest_spread_quantile < 1:
+            raise ValueError(
+                f"rest_spread_quantile must be in [0, 1), got {self.rest_spread_quantile}"
+            )
         if self.min_inlier_share >= 1:
             raise ValueError(f"min_inlier_share must be below 1, got {self.min_inlier_share}")

@@ -224,6 +224,50 @@ def residual_spread(magnitude: np.ndarray) -> float:
     return float(np.median(magnitude) * MEDIAN_TO_SIGMA) if magnitude.size else 0.0
 
 
+def frame_spread(
+    magnitude: np.ndarray,
+    voters: np.ndarray,
+    on_movers: np.ndarray | None,
+    quantile: float,
+    ratio: float,
+    min_rest: float,
+) -> float:
+    """The spread of the plane residual over the frame, work px/frame.
+
+    :func:`residual_spread` of the samples the plane was fitted to
+    (``voters``): the noise plus the rigid parallax the plane leaves. The
+    median breaks down once movers hold half the samples; a mover the
+    camera follows close up then sets the spread, and a tolerance of
+    several spreads hides it. So where the samples outside the known movers
+    (``~on_movers``, at least ``min_rest`` of all) give a spread under
+    ``ratio`` of that one, theirs is kept: the ``quantile`` of their
+    lengths over a 2-D Gaussian's (``sqrt(-2 ln(1 - q))`` sigmas; the
+    median is the quantile 0.5), a high quantile so that rigid parallax's
+    heavy tail is kept, which a median would cut.
+
+    Parameters
+    ----------
+    magnitude : (N,) ndarray
+        Residual lengths at the samples, work px/frame.
+    voters : (N,) ndarray of bool
+    on_movers : (N,) ndarray of bool or None
+        Samples inside the confirmed tracks' predicted boxes; None: none known.
+    quantile : float
+        In [0, 1); 0: the spread over ``voters`` alone.
+    ratio : float
+    min_rest : float
+        Share of all the samples that must lie outside the movers.
+    """
+    spread = residual_spread(magnitude[voters])
+    if quantile <= 0 or on_movers is None or not on_movers.any():
+        return spread
+    rest = voters & ~on_movers
+    if rest.sum() < min_rest * len(magnitude):
+        return spread
+    tail = float(np.quantile(magnitude[rest], quantile) / np.sqrt(-2.0 * np.log(1.0 - quantile)))
+    return tail if tail < ratio * spread else spread
+
+
 def explained_share(
     field: VelocityField,
     sampled: np.ndarray,
