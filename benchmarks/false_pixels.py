@@ -83,11 +83,7 @@ def _line(name: str, counts: np.ndarray) -> str:
 
 def main() -> None:
     groups, results = sweep.on_masked_sequences(__doc__, _run)
-    for group in groups:
-        rows = [r for r in results if r[0].startswith(group)]
-        for name, counts in rows:
-            print("  " + _line(name, counts))
-        print(_line(group, sum((r[1] for r in rows), np.zeros(len(COLUMNS), np.int64))))
+    sweep.print_by_group(groups, results, _line, lambda counts: np.sum(counts, axis=0))
 
 
 if __name__ == "__main__":

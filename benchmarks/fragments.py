@@ -45,7 +45,7 @@ def boxes_per_object(truth: np.ndarray, boxes: list) -> list[int]:
     return counts
 
 
-def _run(job: tuple) -> tuple[str, int, int]:
+def _run(job: tuple) -> tuple[str, tuple[int, int]]:
     name, source, gt, configs = job
     cv2.setNumThreads(1)
     masks = compare.gt_masks(gt)
@@ -62,17 +62,17 @@ def _run(job: tuple) -> tuple[str, int, int]:
             counts = boxes_per_object(read_mask(masks[frame.index]), boxes)
             boxed += sum(c >= 1 for c in counts)
             split += sum(c >= 2 for c in counts)
-    return name, boxed, split
+    return name, (boxed, split)
+
+
+def _line(label: str, counts: tuple[int, int]) -> str:
+    boxed, split = counts
+    return f"{label:28s} boxed {boxed:4d}  split {split:4d} ({split / max(boxed, 1):.2f})"
 
 
 def main() -> None:
     groups, results = sweep.on_masked_sequences(__doc__, _run)
-    for group in groups:
-        rows = [r for r in results if r[0].startswith(group)]
-        for name, boxed, split in rows:
-            print(f"  {name:28s} boxed {boxed:4d}  split {split:4d}")
-        boxed, split = sum(r[1] for r in rows), sum(r[2] for r in rows)
-        print(f"{group:30s} boxed {boxed:4d}  split {split:4d} ({split / max(boxed, 1):.2f})")
+    sweep.print_by_group(groups, results, _line, lambda rows: tuple(map(sum, zip(*rows))))
 
 
 if __name__ == "__main__":

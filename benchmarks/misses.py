@@ -43,7 +43,7 @@ def found_parts(truth: np.ndarray, flagged: np.ndarray) -> list[tuple[int, bool]
     return sorted(parts, reverse=True)
 
 
-def _run(job: tuple) -> tuple[str, int, int, int, int, int]:
+def _run(job: tuple) -> tuple[str, tuple[int, int, int, int, int]]:
     name, source, gt, configs = job
     cv2.setNumThreads(1)
     masks = compare.gt_masks(gt)
@@ -68,10 +68,11 @@ def _run(job: tuple) -> tuple[str, int, int, int, int, int]:
             else:
                 movers += len(counted) - hits
                 lost += 1
-    return name, frames, found, parts, movers, lost
+    return name, (frames, found, parts, movers, lost)
 
 
-def _line(label: str, frames: int, found: int, parts: int, movers: int, lost: int) -> str:
+def _line(label: str, counts: tuple[int, int, int, int, int]) -> str:
+    frames, found, parts, movers, lost = counts
     total, shown = found + parts + movers, frames - lost
     return (
         f"{label:30s} found {found:4d} of {total:4d} ({found / max(total, 1):.3f})  "
@@ -82,11 +83,7 @@ def _line(label: str, frames: int, found: int, parts: int, movers: int, lost: in
 
 def main() -> None:
     groups, results = sweep.on_masked_sequences(__doc__, _run)
-    for group in groups:
-        rows = [r for r in results if r[0].startswith(group)]
-        for row in rows:
-            print(_line("  " + row[0], *row[1:]))
-        print(_line(group, *(sum(r[i] for r in rows) for i in range(1, 6))))
+    sweep.print_by_group(groups, results, _line, lambda rows: tuple(map(sum, zip(*rows))))
 
 
 if __name__ == "__main__":

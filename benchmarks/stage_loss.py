@@ -96,11 +96,7 @@ def _line(name: str, rows: np.ndarray) -> str:
 
 def main() -> None:
     groups, results = sweep.on_masked_sequences(__doc__, _run)
-    for group in groups:
-        rows = [r for r in results if r[0].startswith(group)]
-        for name, table in rows:
-            print("  " + _line(name, table))
-        print(_line(group, np.concatenate([r[1] for r in rows])))
+    sweep.print_by_group(groups, results, _line, np.concatenate)
 
 
 if __name__ == "__main__":

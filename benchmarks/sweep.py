@@ -72,6 +72,18 @@ def on_masked_sequences(description: str, run) -> tuple[list[str], list]:
         return groups, pool.map(run, jobs, chunksize=1)
 
 
+def print_by_group(groups: list[str], results: list, line, pooled) -> None:
+    """For each data set of ``groups``: its sequences' results (``results``
+    as ``(name, result)`` pairs from :func:`on_masked_sequences`), one
+    indented ``line(name, result)`` each, then ``line(group,
+    pooled([result, ...]))`` for the data set as a whole."""
+    for group in groups:
+        rows = [(name, result) for name, result in results if name.startswith(group)]
+        for name, result in rows:
+            print("  " + line(name, result))
+        print(line(group, pooled([result for _, result in rows])))
+
+
 def method(name: str, spec: dict):
     """One variant as a per-frame method of ``compare.run_sequence``, named ``name``."""
     spec = dict(spec)
