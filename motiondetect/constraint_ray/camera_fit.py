@@ -322,13 +322,15 @@ def _spread(
 ) -> float:
     """:func:`~.plane.frame_spread` of the samples' residual lengths, the
     samples in the tracks' predicted boxes (``movers``) known."""
-    on_movers = (
-        None if movers is None else movers[points[:, 1].astype(int), points[:, 0].astype(int)]
-    )
     return frame_spread(
-        magnitude, voters, on_movers, config.rest_spread_quantile, config.rest_spread_ratio,
-        config.min_inlier_share,
+        magnitude, voters, _at_samples(movers, points), config.rest_spread_quantile,
+        config.rest_spread_ratio, config.min_inlier_share,
     )  # fmt: skip
+
+
+def _at_samples(mask: np.ndarray | None, points: np.ndarray) -> np.ndarray | None:
+    """``mask``, (h, w) bool, read at the sample ``points``: (N,) bool; None without one."""
+    return None if mask is None else mask[points[:, 1].astype(int), points[:, 0].astype(int)]
 
 
 def _cut_and_blur(
@@ -365,7 +367,7 @@ def _plane(
         front, behind = (plane_error(points, velocity, h) for h in occluder)
         on_movers = front < behind
     elif movers is not None and config.exclude_tracks:
-        on_movers = movers[points[:, 1].astype(int), points[:, 0].astype(int)]
+        on_movers = _at_samples(movers, points)
     homography, inliers = fit_homography_without(
         points, velocity, on_movers, config.ransac_px, min_rest=config.min_inlier_share,
         voted=voted, **kwargs,

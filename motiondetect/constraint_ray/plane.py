@@ -255,6 +255,8 @@ def frame_spread(
     quantile : float
         In [0, 1); 0: the spread over ``voters`` alone.
     ratio : float
+        The rest's spread is kept only below this share of the spread over
+        ``voters`` (0.5: the movers have doubled the median).
     min_rest : float
         Share of all the samples that must lie outside the movers.
     """
