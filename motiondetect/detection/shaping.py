@@ -1,5 +1,6 @@
 """An object's mask shaped: outlined by the image change, trimmed of
-uncovered background, closed over its gaps and its holes filled.
+uncovered background, closed over its gaps and its holes filled, and its
+rim judged by its look.
 
 Pure functions on (h, w) uint8 0/1 masks at working size; the settings are
 :class:`~.objects.TrackConfig`'s, passed in as values.
@@ -87,17 +88,21 @@ def shaped(
     kept: np.ndarray | None,
     close: np.ndarray | None,
     trim_share: float,
+    look: np.ndarray | None = None,
+    rim_px: int = 0,
 ) -> np.ndarray:
     """An object's mask outlined (with ``near``, :func:`outlined`), trimmed
-    (with ``kept``, :func:`trimmed`), closed and its holes filled, (h, w)
-    uint8 0/1; a step whose mask is None is skipped."""
+    (with ``kept``, :func:`trimmed`), closed, its holes filled, and its rim
+    ``rim_px`` wide judged by the grey frame ``look`` (:func:`rim_by_look`),
+    (h, w) uint8 0/1; a step whose mask is None is skipped."""
     if near is not None:
         own = outlined(own, near, close)
     if kept is not None:
         own = trimmed(own, kept, close, trim_share)
     if close is not None:
         own = cv2.morphologyEx(own, cv2.MORPH_CLOSE, close)
-    return filled(own)
+    own = filled(own)
+    return own if look is None else rim_by_look(own, look, rim_px)
 
 
 def filled(mask: np.ndarray) -> np.ndarray:
@@ -264,10 +269,10 @@ def _histograms(labels: np.ndarray, bins: np.ndarray, where: np.ndarray, count: 
     return np.bincount(keys, minlength=count * size).reshape(count, size).astype(np.float64)
 
 
-def _smoothed(counts: np.ndarray) -> np.ndarray:
+def _smoothed(counts: np.ndarray, prior: float = 0.5) -> np.ndarray:
     """Each row of bin counts as probabilities: spread over neighbouring
-    bins (1/4, 1/2, 1/4) and half a count added to every bin."""
-    spread = 0.5 * counts + 0.5
+    bins (1/4, 1/2, 1/4) and ``prior`` counts added to every bin."""
+    spread = 0.5 * counts + prior
     spread[:, 1:] += 0.25 * counts[:, :-1]
     spread[:, :-1] += 0.25 * counts[:, 1:]
     spread[:, [0, -1]] += 0.25 * counts[:, [0, -1]]  # the edge bins keep their share
@@ -296,3 +301,52 @@ def _hulls(
         if outlines:  # the hull of a point set is that of its parts' outlines
             cv2.fillConvexPoly(hull, cv2.convexHull(np.concatenate(outlines)), 1)
     return hull, medians
+
+
+def rim_by_look(own: np.ndarray, grey: np.ndarray, rim_px: int) -> np.ndarray:
+    """An object's mask without the rim pixels that look like what lies round it.
+
+    The support gate keeps a flagged pixel within ``support_px`` of an image
+    change, so wherever dense flow smears a mover's velocity into the
+    background, a band about that wide survives along the mover's edge.
+    Each pixel of the rim (within ``rim_px`` of the mask's edge) is given
+    to the likelier of the two looks it lies between: the core's (the mask
+    eroded by ``rim_px``) or the unflagged ring ``RING_PX`` wide round the
+    mask (16-bin grey-level histograms spread over neighbouring bins, no
+    count added, so that a tie, a look both share as much, keeps the pixel;
+    equal priors).
+
+    Parameters
+    ----------
+    own : (h, w) ndarray of uint8, 0/1
+        The object's shaped mask.
+    grey : (h, w) ndarray of uint8
+        The working frame over the same pixels.
+    rim_px : int
+        Width of the rim, work px (0: ``own`` is returned as it is).
+
+    Returns
+    -------
+    (h, w) ndarray of uint8, 0/1
+        The parts of the re-judged mask that hold some of the core, holes
+        filled; or ``own`` when there is no core or no ring, or when the
+        cut leaves more such parts than ``own`` had (it went through the
+        mover, not round it).
+    """
+    if rim_px <= 0:
+        return own
+    core = cv2.erode(own, np.ones((2 * rim_px + 1,) * 2, np.uint8))
+    ring = cv2.dilate(own, np.ones((2 * RING_PX + 1,) * 2, np.uint8)) & (1 - own)
+    if not core.any() or not ring.any():
+        return own
+    bins = grey >> _GREY_SHIFT
+    looks = _smoothed(_histograms(ring + 2 * core, bins, (ring | core) > 0, 3)[1:], prior=0.0)
+    kept = own.copy()
+    kept[(own > core) & (looks[0, bins] > looks[1, bins])] = 0  # the rim, looking like the ring
+    count, labels = cv2.connectedComponents(kept, connectivity=8)
+    held = np.zeros(count, bool)
+    held[labels[core > 0]] = True
+    held[0] = False
+    if np.count_nonzero(held) > cv2.connectedComponents(own, connectivity=8)[0] - 1:
+        return own
+    return filled(held[labels].astype(np.uint8))
