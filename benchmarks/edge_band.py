@@ -20,13 +20,10 @@ scored.
 
 from __future__ import annotations
 
-import compare
 import cv2
 import numpy as np
 import sweep
 
-from motiondetect.detection.detector import MotionDetector
-from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import truth_masks
 
 #: Distance bands, work px: 1 .. FAR - 1, and FAR or more.
@@ -61,20 +58,12 @@ def frame_bands(mask: np.ndarray, truth: np.ndarray) -> np.ndarray | None:
 
 
 def _run(job: tuple) -> tuple[str, np.ndarray]:
-    name, source, gt, configs = job
-    cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
-    detector = MotionDetector("both", *configs)
     total = np.zeros(2 * FAR + 1)
-    with open_source(source) as frames:
-        for frame in frames:
-            result = detector.process(frame.image, frame.index, frame.time_s)
-            if frame.index < compare.WARMUP or frame.index not in masks or result.mask is None:
-                continue
-            row = frame_bands(result.mask, read_mask(masks[frame.index]))
-            if row is not None:
-                total += row
-    return name, total
+    for result, truth in sweep.scored_frames(job):
+        row = None if result.mask is None else frame_bands(result.mask, truth)
+        if row is not None:
+            total += row
+    return job[0], total
 
 
 def _line(name: str, total: np.ndarray) -> str:
@@ -85,8 +74,7 @@ def _line(name: str, total: np.ndarray) -> str:
 
 
 def main() -> None:
-    groups, results = sweep.on_masked_sequences(__doc__, _run)
-    sweep.print_by_group(groups, results, _line, lambda rows: np.sum(rows, axis=0))
+    sweep.print_summed(__doc__, _run, _line)
 
 
 if __name__ == "__main__":

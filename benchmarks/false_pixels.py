@@ -21,13 +21,10 @@ are not scored.
 
 from __future__ import annotations
 
-import compare
 import cv2
 import numpy as np
 import sweep
 
-from motiondetect.detection.detector import MotionDetector
-from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import truth_masks
 
 #: Distance bands from the labelled mover, input px: (above, at most).
@@ -59,20 +56,11 @@ def false_pixels(flagged: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 def _run(job: tuple) -> tuple[str, np.ndarray]:
-    name, source, gt, configs = job
-    cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
-    detector = MotionDetector("both", *configs)
     total = np.zeros(len(COLUMNS), np.int64)
-    with open_source(source) as frames:
-        for frame in frames:
-            result = detector.process(frame.image, frame.index, frame.time_s)
-            if frame.index < compare.WARMUP or frame.index not in masks:
-                continue
-            truth = read_mask(masks[frame.index])
-            h, w = truth.shape
-            total += false_pixels(result.input_mask(w, h) > 0, truth)
-    return name, total
+    for result, truth in sweep.scored_frames(job):
+        h, w = truth.shape
+        total += false_pixels(result.input_mask(w, h) > 0, truth)
+    return job[0], total
 
 
 def _line(name: str, counts: np.ndarray) -> str:
@@ -82,8 +70,7 @@ def _line(name: str, counts: np.ndarray) -> str:
 
 
 def main() -> None:
-    groups, results = sweep.on_masked_sequences(__doc__, _run)
-    sweep.print_by_group(groups, results, _line, lambda counts: np.sum(counts, axis=0))
+    sweep.print_summed(__doc__, _run, _line)
 
 
 if __name__ == "__main__":

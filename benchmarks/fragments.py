@@ -15,13 +15,10 @@ counted: OTB has one box per frame, and the fox clip has no mover.
 
 from __future__ import annotations
 
-import compare
 import cv2
 import numpy as np
 import sweep
 
-from motiondetect.detection.detector import MotionDetector
-from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import truth_masks
 
 #: Share of an object's pixels a box must hold to cover it.
@@ -46,23 +43,12 @@ def boxes_per_object(truth: np.ndarray, boxes: list) -> list[int]:
 
 
 def _run(job: tuple) -> tuple[str, tuple[int, int]]:
-    name, source, gt, configs = job
-    cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
-    detector = MotionDetector("both", *configs)
     boxed = split = 0
-    with open_source(source) as frames:
-        for frame in frames:
-            boxes = [
-                region.bbox
-                for region in detector.process(frame.image, frame.index, frame.time_s).regions
-            ]
-            if frame.index < compare.WARMUP or frame.index not in masks:
-                continue
-            counts = boxes_per_object(read_mask(masks[frame.index]), boxes)
-            boxed += sum(c >= 1 for c in counts)
-            split += sum(c >= 2 for c in counts)
-    return name, (boxed, split)
+    for result, truth in sweep.scored_frames(job):
+        counts = boxes_per_object(truth, [region.bbox for region in result.regions])
+        boxed += sum(c >= 1 for c in counts)
+        split += sum(c >= 2 for c in counts)
+    return job[0], (boxed, split)
 
 
 def _line(label: str, counts: tuple[int, int]) -> str:

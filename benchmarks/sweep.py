@@ -37,8 +37,11 @@ from multiprocessing import Pool
 
 import compare
 import cv2
+import numpy as np
 
 from motiondetect.app.settings import SECTIONS
+from motiondetect.detection.detector import MotionDetector
+from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import Counts
 
 
@@ -70,6 +73,30 @@ def on_masked_sequences(description: str, run) -> tuple[list[str], list]:
     ]
     with Pool(args.jobs) as pool:
         return groups, pool.map(run, jobs, chunksize=1)
+
+
+def scored_frames(job: tuple):
+    """Each scored frame of one job of :func:`on_masked_sequences`, as
+    ``(result, truth)``: the detector's ``FrameResult`` (the default
+    detector, or the job's config sections) and the frame's ground-truth
+    mask, on one OpenCV thread. Every frame is run; those before
+    ``compare.WARMUP`` or without a mask are not yielded."""
+    _, source, gt, sections = job
+    cv2.setNumThreads(1)
+    masks = compare.gt_masks(gt)
+    detector = MotionDetector("both", *sections)
+    with open_source(source) as frames:
+        for frame in frames:
+            result = detector.process(frame.image, frame.index, frame.time_s)
+            if frame.index >= compare.WARMUP and frame.index in masks:
+                yield result, read_mask(masks[frame.index])
+
+
+def print_summed(description: str, run, line) -> None:
+    """:func:`on_masked_sequences` with ``run``, each data set printed by
+    :func:`print_by_group` with its sequences' arrays summed."""
+    groups, results = on_masked_sequences(description, run)
+    print_by_group(groups, results, line, lambda rows: np.sum(rows, axis=0))
 
 
 def print_by_group(groups: list[str], results: list, line, pooled) -> None:
