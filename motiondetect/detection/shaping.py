@@ -311,8 +311,8 @@ def rim_by_look(own: np.ndarray, grey: np.ndarray, rim_px: int) -> np.ndarray:
     background, a band about that wide survives along the mover's edge.
     Each pixel of the rim (within ``rim_px`` of the mask's edge) is given
     to the likelier of the two looks it lies between: the core's (the mask
-    eroded by ``rim_px``) or the unflagged ring ``RING_PX`` wide round the
-    mask (16-bin grey-level histograms spread over neighbouring bins, no
+    eroded by ``rim_px``) or the ring ``RING_PX`` wide round the mask
+    (16-bin grey-level histograms spread over neighbouring bins, no
     count added, so that a tie, a look both share as much, keeps the pixel;
     equal priors).
 
@@ -347,6 +347,7 @@ def rim_by_look(own: np.ndarray, grey: np.ndarray, rim_px: int) -> np.ndarray:
     held = np.zeros(count, bool)
     held[labels[core > 0]] = True
     held[0] = False
-    if np.count_nonzero(held) > cv2.connectedComponents(own, connectivity=8)[0] - 1:
+    parts = np.count_nonzero(held)  # one part cannot be more than own had
+    if parts > 1 and parts > cv2.connectedComponents(own, connectivity=8)[0] - 1:
         return own
     return filled(held[labels].astype(np.uint8))
