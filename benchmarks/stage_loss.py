@@ -27,13 +27,11 @@ the default detector or from the config sections given as JSON
 
 from __future__ import annotations
 
-import compare
 import cv2
 import numpy as np
 import sweep
 
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.io.video import open_source, read_mask
 from motiondetect.tools.evaluate import truth_masks
 
 
@@ -60,24 +58,17 @@ def frame_row(result, truth: np.ndarray, tolerance: float) -> list[float] | None
 
 
 def _run(job: tuple) -> tuple[str, np.ndarray]:
-    name, source, gt, configs = job
-    cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
-    detector = MotionDetector("both", *configs)
+    detector = MotionDetector("both", *job[3])  # its ray's tolerance, too
     rows = []
-    with open_source(source) as frames:
-        for frame in frames:
-            result = detector.process(frame.image, frame.index, frame.time_s)
-            if frame.index < compare.WARMUP or frame.index not in masks:
-                continue
-            camera = result.camera
-            if camera is None or not camera.reliable:
-                continue
-            tolerance = detector.ray_config.tolerance(camera.noise_px, camera.spread_px)
-            row = frame_row(result, read_mask(masks[frame.index]), tolerance)
-            if row is not None:
-                rows.append(row)
-    return name, np.array(rows, float).reshape(-1, 8)
+    for result, truth in sweep.scored_frames(job, detector):
+        camera = result.camera
+        if camera is None or not camera.reliable:
+            continue
+        tolerance = detector.ray_config.tolerance(camera.noise_px, camera.spread_px)
+        row = frame_row(result, truth, tolerance)
+        if row is not None:
+            rows.append(row)
+    return job[0], np.array(rows, float).reshape(-1, 8)
 
 
 def _line(name: str, rows: np.ndarray) -> str:

@@ -75,16 +75,16 @@ def on_masked_sequences(description: str, run) -> tuple[list[str], list]:
         return groups, pool.map(run, jobs, chunksize=1)
 
 
-def scored_frames(job: tuple):
+def scored_frames(job: tuple, detector: MotionDetector | None = None):
     """Each scored frame of one job of :func:`on_masked_sequences`, as
-    ``(result, truth)``: the detector's ``FrameResult`` (the default
-    detector, or the job's config sections) and the frame's ground-truth
-    mask, on one OpenCV thread. Every frame is run; those before
+    ``(result, truth)``: the ``detector``'s ``FrameResult`` (by default one
+    made with the job's config sections) and the frame's ground-truth mask,
+    on one OpenCV thread. Every frame is run; those before
     ``compare.WARMUP`` or without a mask are not yielded."""
     _, source, gt, sections = job
     cv2.setNumThreads(1)
     masks = compare.gt_masks(gt)
-    detector = MotionDetector("both", *sections)
+    detector = detector or MotionDetector("both", *sections)
     with open_source(source) as frames:
         for frame in frames:
             result = detector.process(frame.image, frame.index, frame.time_s)
