@@ -40,6 +40,7 @@ from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.regions import (
     components_with_stats,
     hysteresis,
+    true_pixels,
     without_frame_edge,
 )
 from motiondetect.measurement.dense_flow import VelocityField
@@ -280,7 +281,7 @@ def violations(
     """
     h, w = candidates.shape
     s = _TEST_STEP
-    ys, xs = np.nonzero(candidates[::s, ::s])
+    ys, xs = true_pixels(candidates[::s, ::s])
     coarse = np.zeros(((h + s - 1) // s, (w + s - 1) // s), np.uint8)
     if len(ys):
         ys, xs = ys * s, xs * s
@@ -293,7 +294,7 @@ def violations(
         coarse[ys // s, xs // s] = excess > 0
     mask = np.repeat(np.repeat(coarse, s, axis=0), s, axis=1)[:h, :w] & candidates
     if moving_at is not None:
-        ys, xs = np.nonzero(mask)
+        ys, xs = true_pixels(mask)
         mask[ys, xs] = moving_at(ys, xs)
     kernel = np.ones((config.open_px, config.open_px), np.uint8) if config.open_px > 1 else _SQUARE3
     return cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel) > 0

@@ -39,6 +39,7 @@ from motiondetect.constraint_ray.plane import (
     plane_residual,
     samples,
 )
+from motiondetect.detection.regions import true_pixels
 from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
@@ -156,7 +157,7 @@ class CameraFit:
     ) -> np.ndarray:  # fmt: skip
         """``candidates`` (h, w) narrowed by :meth:`determined_beyond_at`, a new array."""
         out = np.zeros_like(candidates)
-        ys, xs = np.nonzero(candidates)
+        ys, xs = true_pixels(candidates)
         out[ys, xs] = self.determined_beyond_at(field, ys, xs, tolerance, epipole, residual)
         return out
 

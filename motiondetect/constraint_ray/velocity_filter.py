@@ -54,6 +54,7 @@ from motiondetect.detection.regions import (
     components,
     discounted_near_edge,
     hysteresis,
+    true_pixels,
     without_frame_edge,
 )
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
@@ -295,7 +296,7 @@ class VelocityRayDetector:
         # A seed's own velocity must be confirmed the other way, as in one
         # frame's test: flow filled in where the view uncovers background
         # behind a near edge is wrong for frames, and adds up in the sum.
-        ys, xs = np.nonzero(seeds)
+        ys, xs = true_pixels(seeds)
         seeds[ys, xs] = field.confirmed_at(ys, xs)
         slow = hysteresis(distance, tolerance, self.config.grow_ratio, seeds)
         if not slow.any():

@@ -55,7 +55,7 @@ import cv2
 import numpy as np
 
 from motiondetect.constraint_ray.camera_fit import CameraFit
-from motiondetect.detection.regions import components, without_frame_edge
+from motiondetect.detection.regions import components, true_pixels, without_frame_edge
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
 #: Plane difference, in difference-noise sigmas, beyond which the camera's
@@ -132,7 +132,7 @@ class ScreenFixed:
         if self._last_residual is not None:
             # At a still pixel the change of -r is the change of the plane's
             # velocity. Such pixels are few but where something is fixed.
-            ys, xs = np.nonzero(evidence & still)
+            ys, xs = true_pixels(evidence & still)
             change = residual[ys, xs] - self._last_residual[ys, xs]
             jolt = vector_length(change) / tolerance_px
             score[ys, xs] += np.minimum(jolt, CHANGE_PENALTY).astype(np.int32)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from motiondetect.detection.regions import components_with_stats
+from motiondetect.detection.regions import components_with_stats, true_pixels
 
 #: Side of the window an image change is averaged over when it supports an
 #: object, work px.
@@ -240,7 +240,7 @@ def interior_grown(
     likelier = _likelier_inside(labels, bins, flag, own, count)
     residual = None if motion is None else motion.residual[box]
     hull, mover = _hulls(labels, stats, own, likelier.any(axis=1), residual)
-    ys, xs = np.nonzero(inner & hull)
+    ys, xs = true_pixels(inner & hull)
     keep = likelier[labels[ys, xs], bins[ys, xs]]
     if motion is not None:
         keep &= motion.unseen_and_with(ys + y0, xs + x0, mover[labels[ys, xs]])

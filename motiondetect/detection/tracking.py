@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from motiondetect.detection.objects import MovingObject, TrackConfig
+from motiondetect.detection.regions import true_pixels
 
 
 def box_iou(a: tuple, b: tuple) -> float:
@@ -170,6 +171,6 @@ def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
     mask = cv2.warpAffine(track.mask.view(np.uint8), shift, (w, h), flags=cv2.INTER_NEAREST) > 0
     if not mask.any():
         return None
-    ys, xs = np.nonzero(mask)
+    ys, xs = true_pixels(mask)
     box = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
     return MovingObject(mask, box, track.velocity, track.id, track.age, held=True)
