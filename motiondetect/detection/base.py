@@ -10,6 +10,7 @@ time needs it (the animate detectors' previous frame, an epipole).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 import cv2
@@ -44,8 +45,11 @@ class DetectorOutput:
 
     Attributes
     ----------
-    flagged : (64, 64) ndarray of bool
-    strength : (64, 64) ndarray of float32 in [0, 1]
+    grid, grid_strength : (64, 64) ndarray of bool, of float32 in [0, 1]
+        The flagged cells and their strength as given (normal-flow
+        detectors); None on the velocity path, where :attr:`flagged` and
+        :attr:`strength` derive them from the pixel mask when first read
+        (the judging never reads them: two resizes a detector a frame saved).
     regions : list of Region
         The detector's own grouping (normal-flow detectors).
     observer : ObserverMotion, optional
@@ -61,8 +65,8 @@ class DetectorOutput:
         Diagnostics written to frames.jsonl.
     """
 
-    flagged: np.ndarray
-    strength: np.ndarray
+    grid: np.ndarray | None
+    grid_strength: np.ndarray | None
     regions: list[Region] = field(default_factory=list)
     observer: ObserverMotion | None = None
     coarse: CoarseField | None = None
@@ -70,6 +74,20 @@ class DetectorOutput:
     pixel_strength: np.ndarray | None = None
     camera: CameraFit | None = None
     extra: dict = field(default_factory=dict)
+
+    @cached_property
+    def flagged(self) -> np.ndarray:
+        """(64, 64) bool: the flagged cells (:func:`cells_from_mask` of the mask
+        on the velocity path)."""
+        return cells_from_mask(self.mask) if self.grid is None else self.grid
+
+    @cached_property
+    def strength(self) -> np.ndarray:
+        """(64, 64) float32 in [0, 1]: each flagged cell's mean strength, 0 elsewhere."""
+        if self.grid_strength is not None:
+            return self.grid_strength
+        cells = cv2.resize(self.pixel_strength, (GRID, GRID), interpolation=cv2.INTER_AREA)
+        return np.where(self.flagged, cells, 0.0).astype(np.float32)
 
     @classmethod
     def empty(cls, shape: tuple[int, int] | None = None, **kwargs) -> DetectorOutput:
@@ -84,15 +102,7 @@ class DetectorOutput:
         """From a pixel mask and its per-pixel strength (velocity path)."""
         if not mask.any():  # often (a quiet frame, the animate detector): skip the resizing
             return cls.empty(mask.shape, **kwargs)
-        flagged = cells_from_mask(mask)
-        cell_strength = cv2.resize(strength, (GRID, GRID), interpolation=cv2.INTER_AREA)
-        return cls(
-            flagged,
-            np.where(flagged, cell_strength, 0.0).astype(np.float32),
-            mask=mask,
-            pixel_strength=strength,
-            **kwargs,
-        )
+        return cls(None, None, mask=mask, pixel_strength=strength, **kwargs)
 
 
 @runtime_checkable
