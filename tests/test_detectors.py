@@ -59,3 +59,21 @@ def test_input_mask_keeps_the_work_mask_centred():
     ys, xs = np.nonzero(result.input_mask(43, 24))
     assert abs(xs.mean() - ((6.5 + 0.5) * 43 / 16 - 0.5)) < 0.5
     assert abs(ys.mean() - ((4 + 0.5) * 24 / 9 - 0.5)) < 0.5
+
+
+def test_a_velocity_output_derives_its_grid_from_the_pixel_mask():
+    """The 64x64 grid of the velocity path is computed when first read, and
+    is what the pixel mask and strength give (each flagged cell a quarter
+    flagged, its strength the cell's mean)."""
+    mask = np.zeros((256, 320), bool)
+    mask[40:80, 100:160] = True  # cells 10-19 down, 20-31 across
+    strength = np.where(mask, 0.5, 0.0).astype(np.float32)
+    out = DetectorOutput.from_mask(mask, strength)
+    assert out.grid is None and out.grid_strength is None
+    rows, cols = np.nonzero(out.flagged)
+    assert (rows.min(), rows.max(), cols.min(), cols.max()) == (10, 19, 20, 31)
+    np.testing.assert_allclose(out.strength[out.flagged], 0.5, atol=1e-6)
+    assert not out.strength[~out.flagged].any()
+    assert out.flagged is out.flagged  # computed once
+    empty = DetectorOutput.from_mask(np.zeros_like(mask), strength * 0)
+    assert empty.grid is not None and not empty.flagged.any()
