@@ -1,7 +1,12 @@
 """Are a version's outputs identical to another's on the sample videos?
 
-    python benchmarks/identity.py digest OUT.json [--measure normal] [--src DIR]
+    python benchmarks/identity.py digest OUT.json [--measure normal] [--src DIR] [--real]
     python benchmarks/identity.py compare A.json B.json
+
+``--real`` adds the shared real clips that are present (``woman.mp4``, six
+DAVIS clips, UCSD birds and surfers, the fox): the check for a change
+meant to leave every result as it was, such as a faster way to the same
+arrays.
 
 ``digest`` runs detect (masks on, no video) on every sample video with the
 library found in ``--src`` (default: this checkout; any earlier checkout of
@@ -23,6 +28,26 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = sorted(p for p in (ROOT / "sample_videos").iterdir() if (p / "video.mp4").exists())
+#: Shared real clips of ``--real``, under ``SHARED_DATA``: a mover among
+#: others, the close and the camera-filling movers, fast pans, water, parallax.
+REAL = (
+    "woman/woman.mp4",
+    *(f"davis/{s}/JPEGImages" for s in ("camel", "goat", "drift-turn", "motocross-bumps",
+                                        "dog-agility", "breakdance")),
+    "ucsd/birds/in", "ucsd/surfers/in", "fox/images",
+)  # fmt: skip
+
+
+def inputs(real: bool) -> list[tuple[str, Path]]:
+    """(name, video or frames folder) of every input digested."""
+    found = [(p.name, p / "video.mp4") for p in SAMPLES]
+    if real:
+        from common import SHARED_DATA
+
+        found += [(r.split("/")[1 if r.startswith(("davis", "ucsd")) else 0], SHARED_DATA / r)
+                  for r in REAL if (SHARED_DATA / r).exists()]  # fmt: skip
+    return found
+
 
 _RUN = """
 import sys
@@ -63,20 +88,19 @@ def digest_output(folder: Path) -> dict:
     }
 
 
-def digest(out: Path, measure: str, src: Path) -> None:
+def digest(out: Path, measure: str, src: Path, real: bool = False) -> None:
     result = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for sample in SAMPLES:
-            target = Path(tmp) / sample.name
-            env_path = f"{src}"
+        for name, path in inputs(real):
+            target = Path(tmp) / name
             subprocess.run(
-                [sys.executable, "-c", _RUN, str(sample / "video.mp4"), str(target), measure],
+                [sys.executable, "-c", _RUN, str(path), str(target), measure],
                 check=True,
                 cwd=src,  # "-c" puts the working directory first on sys.path
-                env={"PYTHONPATH": env_path, "OMP_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"},
+                env={"PYTHONPATH": f"{src}", "OMP_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"},
             )
-            result[sample.name] = digest_output(target / "v")
-            print(f"{sample.name}: {len(result[sample.name]['frames'])} frames", flush=True)
+            result[name] = digest_output(target / "v")
+            print(f"{name}: {len(result[name]['frames'])} frames", flush=True)
     out.write_text(json.dumps(result, indent=1))
 
 
@@ -91,7 +115,7 @@ def compare(a: Path, b: Path) -> int:
         parts = [k for k in da[name] if da[name][k] != db[name].get(k)]
         print(f"{name}: {'identical' if not parts else 'DIFFERS in ' + ', '.join(parts)}")
         differing += bool(parts)
-    print(f"{len(set(da) | set(db)) - differing} of {len(set(da) | set(db))} samples identical")
+    print(f"{len(set(da) | set(db)) - differing} of {len(set(da) | set(db))} inputs identical")
     return 1 if differing else 0
 
 
@@ -102,12 +126,13 @@ def main() -> None:
     d.add_argument("out", type=Path)
     d.add_argument("--measure", default="")
     d.add_argument("--src", type=Path, default=ROOT)
+    d.add_argument("--real", action="store_true", help="also the shared real clips present")
     c = sub.add_parser("compare")
     c.add_argument("a", type=Path)
     c.add_argument("b", type=Path)
     args = parser.parse_args()
     if args.command == "digest":
-        digest(args.out, args.measure, args.src.resolve())
+        digest(args.out, args.measure, args.src.resolve(), args.real)
     else:
         sys.exit(compare(args.a, args.b))
 
