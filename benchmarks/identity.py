@@ -28,14 +28,14 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = sorted(p for p in (ROOT / "sample_videos").iterdir() if (p / "video.mp4").exists())
-#: Shared real clips of ``--real``, under ``SHARED_DATA``: a mover among
-#: others, the close and the camera-filling movers, fast pans, water, parallax.
-REAL = (
-    "woman/woman.mp4",
-    *(f"davis/{s}/JPEGImages" for s in ("camel", "goat", "drift-turn", "motocross-bumps",
-                                        "dog-agility", "breakdance")),
-    "ucsd/birds/in", "ucsd/surfers/in", "fox/images",
-)  # fmt: skip
+#: Shared real clips of ``--real`` (name: path under ``SHARED_DATA``): a mover
+#: among others, the close and the camera-filling movers, fast pans, water, parallax.
+REAL = {
+    "woman": "woman/woman.mp4",
+    **{s: f"davis/{s}/JPEGImages" for s in ("camel", "goat", "drift-turn", "motocross-bumps",
+                                            "dog-agility", "breakdance")},
+    "birds": "ucsd/birds/in", "surfers": "ucsd/surfers/in", "fox": "fox/images",
+}  # fmt: skip
 
 
 def inputs(real: bool) -> list[tuple[str, Path]]:
@@ -44,8 +44,7 @@ def inputs(real: bool) -> list[tuple[str, Path]]:
     if real:
         from common import SHARED_DATA
 
-        found += [(r.split("/")[1 if r.startswith(("davis", "ucsd")) else 0], SHARED_DATA / r)
-                  for r in REAL if (SHARED_DATA / r).exists()]  # fmt: skip
+        found += [(n, SHARED_DATA / r) for n, r in REAL.items() if (SHARED_DATA / r).exists()]
     return found
 
 
