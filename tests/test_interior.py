@@ -16,7 +16,7 @@ import pytest
 from skimage import data
 
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.detection.objects import TrackConfig
+from motiondetect.detection.objects import TrackConfig, group_objects
 from motiondetect.detection.shaping import RING_PX, InteriorMotion, interior_grown
 from motiondetect.measurement.aperture import structure_tensor
 
@@ -81,6 +81,51 @@ def test_smear_that_looks_like_the_background_is_not_added():
     grown = interior_grown(u.astype(np.uint8), flagged, grey, INSET) > 0
     assert grown[deep & inside].mean() > 0.9
     assert RING_PX >= INSET  # the ring reaches past the smear band
+
+
+def _open_sided_mover():
+    """A plain square (220) on texture, flagged with a smear band round it,
+    whose image changed only in a C: thick bands on its left, top and bottom
+    (the right third of it shows no change, as a plain side does not)."""
+    grey = _textured((120, 160))
+    mover = np.zeros(grey.shape, bool)
+    mover[30:90, 40:100] = True
+    grey[mover] = 220
+    flagged = np.zeros(grey.shape, bool)
+    flagged[30 - INSET : 90 + INSET, 40 - INSET : 100 + INSET] = True
+    changed = np.zeros(grey.shape, bool)
+    changed[26:94, 36:56] = True
+    changed[26:46, 36:104] = True
+    changed[74:94, 36:104] = True
+    velocity = np.zeros((*grey.shape, 2), np.float32)
+    velocity[mover] = (3.0, 0.0)
+    return grey, mover, flagged, changed, velocity
+
+
+@pytest.mark.parametrize("memory", ["none", "unknown", "differs"])
+def test_the_interior_put_back_is_neither_outlined_nor_trimmed_away(memory):
+    """The gate keeps the C (0.69 of the square); the interior step puts
+    back the plain side. No change can outline that side, and with the
+    remembered background unknown or unlike it, the trim keeps it: the
+    whole square. (Before the step's pixels joined the outline and the
+    trim, both cut it back to the C, 0.69.) Without the interior step, the C."""
+    grey, mover, flagged, changed, velocity = _open_sided_mover()
+    background = {"none": None, "unknown": np.ones(grey.shape, bool)}.get(memory, mover.copy())
+    for inset, low, high in ((INSET, 0.99, 1.0), (0, 0.6, 0.75)):
+        config = TrackConfig(interior_px=inset)
+        (obj,) = group_objects(flagged, velocity, config, changed, background, grey)
+        assert low <= obj.mask[mover].mean() <= high
+        assert (obj.mask & ~flagged).sum() == 0
+
+
+def test_the_interior_put_back_is_trimmed_where_the_memory_knows_it_as_background():
+    """The same square with the remembered background matching its plain
+    side (only the C differs from it): that side is background the mover
+    uncovered, and the trim cuts the object back to the C."""
+    grey, mover, flagged, changed, velocity = _open_sided_mover()
+    background = changed.copy()
+    (obj,) = group_objects(flagged, velocity, TrackConfig(), changed, background, grey)
+    assert 0.6 <= obj.mask[mover].mean() <= 0.75
 
 
 GRASS = data.grass()

@@ -92,7 +92,9 @@ class TrackConfig:
         hull of the region's supported pixels, that looks like them rather
         than like the ring round the region, could not have shown a change,
         and moves with them rather than with the plane, is kept
-        (:func:`.shaping.interior_grown`; 0: off). DAVIS cropped so that
+        (:func:`.shaping.interior_grown`; 0: off), and neither the outline
+        nor the trim, which need an image change, takes it out again (only
+        a remembered background that matches it does). DAVIS cropped so that
         its movers fill half the view: cell F1 0.367 to 0.418; on the full
         frames DAVIS's false alarms fall by a quarter (docs/detectors.md,
         "A plain mover's interior").
@@ -238,8 +240,8 @@ def group_objects(
         (:func:`.shaping.outlined`).
     background : (h, w) ndarray of bool, optional
         Where the image differs from the remembered background (or it is
-        unknown); each object is trimmed to its largest part within
-        ``support_px`` of both this and ``changed`` (:func:`.shaping.trimmed`).
+        unknown); each object is trimmed to its largest part within ``support_px``
+        of both this and ``changed`` (:func:`.shaping.trimmed`; its interior: this).
     grey, motion : optional
         The working frame and its motion, for :func:`.shaping.interior_grown` and the rim.
 
@@ -248,7 +250,7 @@ def group_objects(
     list of MovingObject, largest first, with holes filled."""
     h, w = flagged.shape
     mask, kept, tight = _gated(flagged, config, changed, background)
-    mask = interior_grown(mask, flagged, grey, config.interior_px, motion)  # gated: put back
+    mask, kept, tight = _with_interior(mask, kept, tight, flagged, background, grey, config, motion)
     kernel, close = _square(config.gap_px), _square(config.close_px)
     joined = mask if kernel is None else cv2.dilate(mask, kernel)
     count, labels, stats = components_with_stats(joined)
@@ -302,3 +304,29 @@ def _gated(
     if background is None:
         return mask, None, tight
     return mask, within(mask, background & changed, config.support_px), tight
+
+
+def _with_interior(
+    mask: np.ndarray,
+    kept: np.ndarray | None,
+    tight: np.ndarray | None,
+    flagged: np.ndarray,
+    background: np.ndarray | None,
+    grey: np.ndarray | None,
+    config: TrackConfig,
+    motion: InteriorMotion | None,
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """:func:`_gated`'s three maps with the interior :func:`.shaping.interior_grown`
+    puts back. A plain interior shows no image change, so the change cannot
+    outline it, nor tell it from the background the mover uncovered: it joins
+    the outline, and the trim where it is within ``support_px`` of where the
+    image differs from the remembered ``background`` (or that is unknown)."""
+    grown = interior_grown(mask, flagged, grey, config.interior_px, motion)
+    if grown is mask:
+        return mask, kept, tight
+    interior = grown & (1 - mask)
+    if tight is not None:
+        tight = tight | interior
+    if kept is not None and background is not None:
+        kept = kept | within(interior, background, config.support_px)
+    return grown, kept, tight

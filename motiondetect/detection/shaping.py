@@ -123,7 +123,8 @@ def trimmed(
         The object's flagged pixels.
     kept : (h, w) ndarray of uint8, 0/1
         Pixels that differ from the remembered background as well as from
-        the previous frame.
+        the previous frame (a plain interior put back, which cannot show
+        the latter: from the remembered background alone).
     close : (k, k) ndarray of uint8 or None
         The object's closing kernel, applied to the kept part first.
     share : float
