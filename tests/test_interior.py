@@ -29,15 +29,21 @@ def _textured(shape, low=40, high=140, seed=0):
     return np.random.default_rng(seed).integers(low, high, shape).astype(np.uint8)
 
 
-def _square_scene():
-    """A plain bright square (220) on a dark texture; flagged: the square and a
-    smear band of ``INSET`` px round it; supported: 2 px each side of its edge."""
+def _plain_square(x1: int):
+    """A plain bright square (220), rows 30-90 and columns 40 to ``x1``, on a
+    dark texture; flagged: the square and a smear band of ``INSET`` px round it."""
     grey = _textured((120, 160))
     mover = np.zeros(grey.shape, bool)
-    mover[30:90, 40:120] = True
+    mover[30:90, 40:x1] = True
     grey[mover] = 220
     flagged = np.zeros(grey.shape, bool)
-    flagged[30 - INSET : 90 + INSET, 40 - INSET : 120 + INSET] = True
+    flagged[30 - INSET : 90 + INSET, 40 - INSET : x1 + INSET] = True
+    return grey, mover, flagged
+
+
+def _square_scene():
+    """:func:`_plain_square` to column 120; supported: 2 px each side of its edge."""
+    grey, mover, flagged = _plain_square(120)
     edge = np.zeros(grey.shape, bool)
     edge[28:92, 38:122] = True
     edge[32:88, 42:118] = False
@@ -84,15 +90,10 @@ def test_smear_that_looks_like_the_background_is_not_added():
 
 
 def _open_sided_mover():
-    """A plain square (220) on texture, flagged with a smear band round it,
-    whose image changed only in a C: thick bands on its left, top and bottom
-    (the right third of it shows no change, as a plain side does not)."""
-    grey = _textured((120, 160))
-    mover = np.zeros(grey.shape, bool)
-    mover[30:90, 40:100] = True
-    grey[mover] = 220
-    flagged = np.zeros(grey.shape, bool)
-    flagged[30 - INSET : 90 + INSET, 40 - INSET : 100 + INSET] = True
+    """:func:`_plain_square` to column 100, whose image changed only in a C:
+    thick bands on its left, top and bottom (the right third of it shows no
+    change, as a plain side does not)."""
+    grey, mover, flagged = _plain_square(100)
     changed = np.zeros(grey.shape, bool)
     changed[26:94, 36:56] = True
     changed[26:46, 36:104] = True
