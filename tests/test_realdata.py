@@ -56,6 +56,10 @@ def detect(tmp_path, source, *extra):
         # five frames the followed rider is covered on 5-8 % of its pixels, not
         # 16-24 %, where the wider band reached into it.
         ("davis/motocross-bumps", "JPEGImages", 0.8, 0.40, 0.6),
+        # A plain, light dog the camera follows: its flank shows no image change,
+        # so the interior step puts it back (1.00 / 0.84 / 0.00; 0.78 cell F1 while
+        # the outline and the trim, which need that change, cut it out again).
+        ("davis/dog", "JPEGImages", 0.95, 0.81, 0.2),
         ("ucsd/birds", "in", 0.55, 0.08, 2.6),
         ("sbi/IBMtest2", "input", 0.9, 0.75, 0.5),
     ],
