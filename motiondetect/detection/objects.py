@@ -235,13 +235,11 @@ def group_objects(
     config : TrackConfig
     changed : (h, w) ndarray of bool, optional
         Where the image changed once the camera's motion is undone; flagged
-        pixels farther than ``support_px`` from it are dropped, and each
-        object is outlined by those within ``outline_px`` of it
-        (:func:`.shaping.outlined`).
+        pixels farther than ``support_px`` from it are dropped, and objects
+        are outlined by it (:func:`_shaping_maps`).
     background : (h, w) ndarray of bool, optional
         Where the image differs from the remembered background (or it is
-        unknown); each object is trimmed to its largest part within ``support_px``
-        of both this and ``changed`` (:func:`.shaping.trimmed`; its interior: this).
+        unknown): the objects are trimmed by it (:func:`_shaping_maps`).
     grey, motion : optional
         The working frame and its motion, for :func:`.shaping.interior_grown` and the rim.
 
@@ -249,8 +247,10 @@ def group_objects(
     -------
     list of MovingObject, largest first, with holes filled."""
     h, w = flagged.shape
-    mask, kept, tight = _gated(flagged, config, changed, background)
-    mask, kept, tight = _with_interior(mask, kept, tight, flagged, background, grey, config, motion)
+    gated = flagged.astype(np.uint8)
+    gated = gated if changed is None else within(gated, changed, config.support_px)
+    mask = interior_grown(gated, flagged, grey, config.interior_px, motion)  # gated: put back
+    tight, kept = _shaping_maps(gated, mask, config, changed, background)
     kernel, close = _square(config.gap_px), _square(config.close_px)
     joined = mask if kernel is None else cv2.dilate(mask, kernel)
     count, labels, stats = components_with_stats(joined)
@@ -283,50 +283,33 @@ def _square(px: int) -> np.ndarray | None:
     return np.ones((2 * (px // 2) + 1,) * 2, np.uint8) if px > 0 else None
 
 
-def _gated(
-    flagged: np.ndarray,
+def _shaping_maps(
+    gated: np.ndarray,
+    grown: np.ndarray,
     config: TrackConfig,
     changed: np.ndarray | None,
     background: np.ndarray | None,
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """The flagged pixels within ``support_px`` of ``changed``; those also
-    within it of where the image differs from the remembered ``background``;
-    and those within ``outline_px`` of ``changed`` (:func:`.shaping.outlined`), (h, w)
-    uint8 0/1 each. The last two are None without a background, or with an
-    ``outline_px`` not below ``support_px``."""
-    mask = flagged.astype(np.uint8)
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The outline's and the trim's maps, (h, w) uint8 0/1 each: the
+    ``gated`` pixels within ``outline_px`` of ``changed``
+    (:func:`.shaping.outlined`), and those within ``support_px`` of where the
+    image differs from the remembered ``background`` and changed
+    (:func:`.shaping.trimmed`). The interior that ``grown`` put back joins
+    both, the trim's only within ``support_px`` of ``background``: a plain
+    interior shows no change, so the change can neither outline it nor tell
+    it from the background the mover uncovered; the memory still can. The
+    outline's map is None with ``outline_px`` not below ``support_px``, the
+    trim's without a ``background``; both without ``changed``."""
     if changed is None:
-        return mask, None, None
-    mask = within(mask, changed, config.support_px)
+        return None, None
+    interior = grown & (1 - gated) if grown is not gated else None
     tight = None
     if config.outline_px < config.support_px:
-        tight = within(mask, changed, config.outline_px)
+        tight = within(gated, changed, config.outline_px)
+        tight = tight if interior is None else tight | interior
     if background is None:
-        return mask, None, tight
-    return mask, within(mask, background & changed, config.support_px), tight
-
-
-def _with_interior(
-    mask: np.ndarray,
-    kept: np.ndarray | None,
-    tight: np.ndarray | None,
-    flagged: np.ndarray,
-    background: np.ndarray | None,
-    grey: np.ndarray | None,
-    config: TrackConfig,
-    motion: InteriorMotion | None,
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """:func:`_gated`'s three maps with the interior :func:`.shaping.interior_grown`
-    puts back. A plain interior shows no image change, so the change cannot
-    outline it, nor tell it from the background the mover uncovered: it joins
-    the outline, and the trim where it is within ``support_px`` of where the
-    image differs from the remembered ``background`` (or that is unknown)."""
-    grown = interior_grown(mask, flagged, grey, config.interior_px, motion)
-    if grown is mask:
-        return mask, kept, tight
-    interior = grown & (1 - mask)
-    if tight is not None:
-        tight = tight | interior
-    if kept is not None and background is not None:
-        kept = kept | within(interior, background, config.support_px)
-    return grown, kept, tight
+        return tight, None
+    kept = within(gated, background & changed, config.support_px)
+    if interior is not None:
+        kept |= within(interior, background, config.support_px)
+    return tight, kept
