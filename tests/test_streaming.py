@@ -121,25 +121,3 @@ def test_an_error_while_judging_stops_the_reading_thread_before_it_propagates(mo
     finally:
         cv2.setNumThreads(before)
     assert readers == []
-
-
-def test_the_plane_all_samples_vote_for_is_fitted_with_the_measurement():
-    from motiondetect.constraint_ray.camera_fit import fit_camera
-
-    from .velocity_scenes import background, paste
-
-    md = MotionDetector("both")
-    frames = [paste(background(3.0 * t), 200 + 4.0 * t, 150)[0] for t in range(2)]
-    assert md.measure_frame(frames[0]) is None
-    field = md.measure_frame(frames[1])
-    homography, inliers = field.voted_plane
-    centre = np.float64([[[160.0, 160.0]]])
-    was = cv2.perspectiveTransform(centre, homography)[0, 0]
-    scale = field.shape[1] / frames[0].shape[1]  # the camera moved 3 input px right
-    assert np.allclose(was - centre[0, 0], (3.0 * scale, 0.0), atol=0.1)
-    assert 0.8 < inliers.mean() < 1.0  # the mover's samples are not the plane's
-    given = fit_camera(field, md.fit_config)
-    fresh = fit_camera(field.replaced(voted_plane=None), md.fit_config)
-    assert np.array_equal(given.homography, fresh.homography)
-    assert np.array_equal(given.voted, fresh.voted)
-    assert np.array_equal(given.residual_px, fresh.residual_px)

@@ -31,10 +31,11 @@ from motiondetect.constraint_ray.epipole import fit_epipole, off_ray
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
     MEDIAN_TO_SIGMA,
-    at_samples,
     explained_share,
+    fit_homography,
+    fit_homography_without,
     frame_spread,
-    kept_plane,
+    plane_error,
     plane_residual,
     samples,
 )
@@ -258,7 +259,6 @@ def fit_camera(
     reference_sharpness: float | None = None,
     movers: np.ndarray | None = None,
     occluder: tuple[np.ndarray, np.ndarray] | None = None,
-    voted: tuple[np.ndarray | None, np.ndarray] | None = None,
 ) -> CameraFit:
     """Fit the observer's motion to one frame's velocity field.
 
@@ -276,8 +276,6 @@ def fit_camera(
         The last motions of a mover in front that carried the plane and of
         the layer behind it (:class:`~.layer_order.LayerOrder`): the samples
         nearer the first stop voting, in place of the tracks'.
-    voted : (homography, inliers), optional
-        :func:`~.plane.voted_plane` of ``field``, if fitted already.
 
     Returns
     -------
@@ -286,13 +284,17 @@ def fit_camera(
     """
     points, velocity = samples(field, config.sample_step_px)
     speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
-    plane = kept_plane(points, velocity, movers, occluder, config, voted)
-    (homography, inliers, voters), voted = plane[:3], plane[3]
+    homography, inliers, voted, voters = _plane(points, velocity, movers, occluder, config)
     difference = None if homography is None else plane_difference(field, homography)
     change_noise = None if difference is None else difference_noise(difference)
-    residual, sampled, share, energy = _plane_residual(
-        field, homography, inliers, change_noise, config
-    )
+    residual = sampled = None
+    share, energy = (float(inliers.mean()) if len(inliers) else 0.0), 0.0
+    if homography is not None:
+        residual = plane_residual(field, homography)
+        step = config.sample_step_px
+        sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
+        energy = (config.aperture_noise * change_noise) ** 2
+        share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
     cut, sharp, blurred = _cut_and_blur(field, difference, reference_sharpness, config)
     reason = _reason(homography, share, speed, field.searched_px, cut, blurred, config)
     edge = config.edge_px + speed
@@ -312,27 +314,6 @@ def fit_camera(
     )  # fmt: skip
 
 
-def _plane_residual(
-    field: VelocityField,
-    homography: np.ndarray | None,
-    inliers: np.ndarray,
-    change_noise: float | None,
-    config: FitConfig,
-) -> tuple[np.ndarray | None, np.ndarray | None, float, float]:
-    """The plane residual at every pixel and at the samples (None without a
-    plane), the share of samples the plane explains (:func:`explained_share`)
-    and the aperture test's noise energy."""
-    share = float(inliers.mean()) if len(inliers) else 0.0
-    if homography is None:
-        return None, None, share, 0.0
-    residual = plane_residual(field, homography)
-    step = config.sample_step_px
-    sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
-    energy = (config.aperture_noise * change_noise) ** 2
-    share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
-    return residual, sampled, share, energy
-
-
 def _spread(
     points: np.ndarray,
     magnitude: np.ndarray,
@@ -343,9 +324,14 @@ def _spread(
     """:func:`~.plane.frame_spread` of the samples' residual lengths, the
     samples in the tracks' predicted boxes (``movers``) known."""
     return frame_spread(
-        magnitude, voters, at_samples(movers, points), config.rest_spread_quantile,
+        magnitude, voters, _at_samples(movers, points), config.rest_spread_quantile,
         config.rest_spread_ratio, config.min_inlier_share,
     )  # fmt: skip
+
+
+def _at_samples(mask: np.ndarray | None, points: np.ndarray) -> np.ndarray | None:
+    """``mask``, (h, w) bool, read at the sample ``points``: (N,) bool; None without one."""
+    return None if mask is None else mask[points[:, 1].astype(int), points[:, 0].astype(int)]
 
 
 def _cut_and_blur(
@@ -361,6 +347,34 @@ def _cut_and_blur(
     sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
     return cut, sharp, blurred
+
+
+def _plane(
+    points: np.ndarray,
+    velocity: np.ndarray,
+    movers: np.ndarray | None,
+    occluder: tuple[np.ndarray, np.ndarray] | None,
+    config: FitConfig,
+) -> tuple[np.ndarray | None, np.ndarray, tuple[np.ndarray | None, np.ndarray], np.ndarray]:
+    """RANSAC's plane and its inliers, the samples on ``movers`` (with
+    ``occluder``, those nearer its motion instead) not voting where they
+    carry the plane (:func:`~.plane.fit_homography_without`); the plane all
+    samples vote for, with its inliers; and the samples the plane kept was
+    fitted to (all of them unless it is the refit without the movers)."""
+    kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
+    voted = fit_homography(points, velocity, config.ransac_px, **kwargs)
+    on_movers = np.zeros(len(points), bool)
+    if occluder is not None:  # the tracks found while it held the plane lie off it
+        front, behind = (plane_error(points, velocity, h) for h in occluder)
+        on_movers = front < behind
+    elif movers is not None and config.exclude_tracks:
+        on_movers = _at_samples(movers, points)
+    homography, inliers = fit_homography_without(
+        points, velocity, on_movers, config.ransac_px, min_rest=config.min_inlier_share,
+        voted=voted, **kwargs,
+    )  # fmt: skip
+    voters = ~on_movers if homography is not voted[0] else np.ones(len(points), bool)
+    return homography, inliers, voted, voters
 
 
 def _epipole(

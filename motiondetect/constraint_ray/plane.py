@@ -12,7 +12,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
 
@@ -309,51 +308,3 @@ def explained_share(
     tensor = tuple(t[step:-step:step, step:-step:step].reshape(-1) for t in field.structure)
     length = vector_length(determined(sampled, tensor, energy))
     return float((inliers | (length < threshold_px)).mean())
-
-
-def at_samples(mask: np.ndarray | None, points: np.ndarray) -> np.ndarray | None:
-    """``mask``, (h, w) bool, read at the sample ``points``: (N,) bool; None without one."""
-    return None if mask is None else mask[points[:, 1].astype(int), points[:, 0].astype(int)]
-
-
-def voted_plane(field: VelocityField, config: FitConfig) -> tuple[np.ndarray | None, np.ndarray]:
-    """The plane every sample votes for, and its inliers: :func:`fit_homography`
-    of the field's samples. A function of the field alone, so the detector
-    fits it with the measurement (on the measuring thread when that runs ahead)."""
-    points, velocity = samples(field, config.sample_step_px)
-    return fit_homography(points, velocity, config.ransac_px, **_ransac_kwargs(config))
-
-
-def _ransac_kwargs(config: FitConfig) -> dict:
-    """:func:`fit_homography`'s settings from ``config``."""
-    return {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
-
-
-def kept_plane(
-    points: np.ndarray,
-    velocity: np.ndarray,
-    movers: np.ndarray | None,
-    occluder: tuple[np.ndarray, np.ndarray] | None,
-    config: FitConfig,
-    voted: tuple[np.ndarray | None, np.ndarray] | None = None,
-) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, tuple[np.ndarray | None, np.ndarray]]:
-    """RANSAC's plane and its inliers, the samples on ``movers`` (with
-    ``occluder``, those nearer its motion instead) not voting where they
-    carry the plane (:func:`fit_homography_without`); the samples the plane
-    kept was fitted to (all of them unless it is the refit without the
-    movers); and the plane all samples vote for, with its inliers
-    (``voted``, :func:`voted_plane`, fitted here when not given)."""
-    kwargs = _ransac_kwargs(config)
-    voted = voted or fit_homography(points, velocity, config.ransac_px, **kwargs)
-    on_movers = np.zeros(len(points), bool)
-    if occluder is not None:  # the tracks found while it held the plane lie off it
-        front, behind = (plane_error(points, velocity, h) for h in occluder)
-        on_movers = front < behind
-    elif movers is not None and config.exclude_tracks:
-        on_movers = at_samples(movers, points)
-    homography, inliers = fit_homography_without(
-        points, velocity, on_movers, config.ransac_px, min_rest=config.min_inlier_share,
-        voted=voted, **kwargs,
-    )  # fmt: skip
-    voters = ~on_movers if homography is not voted[0] else np.ones(len(points), bool)
-    return homography, inliers, voters, voted

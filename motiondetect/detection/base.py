@@ -16,14 +16,13 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 import cv2
 import numpy as np
 
-from motiondetect.detection.regions import Region, find_regions
 from motiondetect.measurement.stages import GRID
 
 if TYPE_CHECKING:
     from motiondetect.constraint_ray.camera_fit import CameraFit
     from motiondetect.constraint_ray.hough import CoarseField
     from motiondetect.constraint_ray.observer_motion import ObserverMotion
-    from motiondetect.measurement.normal_flow import GridGeometry
+    from motiondetect.detection.regions import Region
 
 #: A grid cell counts as flagged when this share of its pixels is.
 CELL_SHARE = 0.25
@@ -143,25 +142,3 @@ DETECTOR_SETS = {
         "both": ("constraint-ray", "animate"),
     },
 }
-
-
-def fuse(
-    outputs: dict[str, DetectorOutput], geometry: GridGeometry, min_cells: int
-) -> tuple[np.ndarray, list[Region]]:
-    """Union of the detectors' flagged cells, regrouped, with attribution."""
-    names = list(outputs)
-    if len(names) == 1:
-        only = outputs[names[0]]
-        return only.flagged, only.regions
-    flagged = np.zeros_like(outputs[names[0]].flagged)
-    strength = np.zeros(flagged.shape, np.float32)
-    for out in outputs.values():
-        flagged |= out.flagged
-        strength = np.maximum(strength, out.strength)
-    regions = find_regions(flagged, strength, geometry, min_cells=min_cells, detector="")
-    fused = []
-    for region in regions:
-        rows, cols = region.cells[:, 0], region.cells[:, 1]
-        found = tuple(n for n in names if outputs[n].flagged[rows, cols].any())
-        fused.append(Region(region.bbox, region.cells, region.area_px, region.score, found))
-    return flagged, fused

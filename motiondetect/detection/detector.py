@@ -25,22 +25,15 @@ import numpy as np
 from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.layer_order import LayerOrder
-from motiondetect.constraint_ray.plane import voted_plane
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection import streaming
-from motiondetect.detection.base import (
-    DETECTOR_SETS,
-    DetectorOutput,
-    cells_from_mask,
-    fuse,
-    registry,
-)
+from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.frame_result import FrameResult
 from motiondetect.detection.framing import Framing
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, group_objects
-from motiondetect.detection.regions import Region, regions_mask
+from motiondetect.detection.regions import Region, find_regions, regions_mask
 from motiondetect.detection.rigid_depth import RigidDepth
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
 from motiondetect.detection.shaping import CHANGE_BOX, InteriorMotion
@@ -53,6 +46,28 @@ from motiondetect.measurement.repeats import REPEAT
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
+
+
+def fuse(
+    outputs: dict[str, DetectorOutput], geometry: GridGeometry, min_cells: int
+) -> tuple[np.ndarray, list[Region]]:
+    """Union of the detectors' flagged cells, regrouped, with attribution."""
+    names = list(outputs)
+    if len(names) == 1:
+        only = outputs[names[0]]
+        return only.flagged, only.regions
+    flagged = np.zeros_like(outputs[names[0]].flagged)
+    strength = np.zeros(flagged.shape, np.float32)
+    for out in outputs.values():
+        flagged |= out.flagged
+        strength = np.maximum(strength, out.strength)
+    regions = find_regions(flagged, strength, geometry, min_cells=min_cells, detector="")
+    fused = []
+    for region in regions:
+        rows, cols = region.cells[:, 0], region.cells[:, 1]
+        found = tuple(n for n in names if outputs[n].flagged[rows, cols].any())
+        fused.append(Region(region.bbox, region.cells, region.area_px, region.score, found))
+    return flagged, fused
 
 
 def object_region(
@@ -217,10 +232,7 @@ class MotionDetector:
         (:meth:`stream`). None for the first frame.
         """
         flow = self.pipeline.process(frame)
-        if not isinstance(flow, VelocityField):
-            return flow
-        flow = flow.prepared()  # the maps, and the plane all samples vote for, made here
-        return flow.replaced(voted_plane=voted_plane(flow, self.fit_config))
+        return flow.prepared() if isinstance(flow, VelocityField) else flow
 
     def judge(self, flow: object | None, index: int, time_s: float) -> FrameResult:
         """The second half of :meth:`process`: detectors, fusion and objects
@@ -313,9 +325,7 @@ class MotionDetector:
         the blur reference, the epipole and the layer order learn from it."""
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         occluder = self._order.occluder  # a mover that fills the view and took the plane
-        fit = fit_camera(
-            flow, self.fit_config, self._epipole, reference, predicted, occluder, flow.voted_plane
-        )
+        fit = fit_camera(flow, self.fit_config, self._epipole, reference, predicted, occluder)
         self._order.update(flow, fit.voted, fit.voted_inliers, fit.edge_band_px)
         if self.fit_config.blur_ratio > 0:  # the blur test's reference
             self._sharpness.append(fit.sharpness)

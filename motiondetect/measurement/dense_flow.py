@@ -74,11 +74,6 @@ class VelocityField:
         velocities from the last field it started from on a steady fast pan
         (``DenseFlowConfig.start_speed_px``); None: it started from rest, and
         the velocities' speed is that distance (``FitConfig.max_speed_px``).
-    voted_plane : tuple, optional
-        The plane every sample of the field votes for, with its inliers
-        (:func:`~motiondetect.constraint_ray.camera_fit.voted_plane`), fitted
-        by the detector with the measurement, on the measuring thread when
-        that runs ahead; None: the fit makes it.
     """
 
     velocity_px: np.ndarray
@@ -93,7 +88,6 @@ class VelocityField:
     picture: Picture | None = None
     interval_s: float | None = None
     searched_px: float | None = None
-    voted_plane: Any = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -106,12 +100,7 @@ class VelocityField:
         keeping every map already computed from the velocity and the frame
         (the cached properties, ``source_px`` and ``structure``): they
         depend on neither."""
-        return self.replaced(camera=camera, tracked=tracked, interval_s=interval_s)
-
-    def replaced(self, **changes: Any) -> VelocityField:
-        """This field with ``changes`` to its fields, keeping every map already
-        computed (the cached properties: ``source_px``, ``structure``)."""
-        out = dataclasses.replace(self, **changes)
+        out = dataclasses.replace(self, camera=camera, tracked=tracked, interval_s=interval_s)
         for name, value in self.__dict__.items():
             out.__dict__.setdefault(name, value)  # fields are set; only caches are missing
         return out
