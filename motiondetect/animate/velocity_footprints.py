@@ -8,10 +8,12 @@ came from, ``q - v(q)``, so the *prediction* is the velocity the previous
 frame had there, and the test is whether the new velocity is within the
 smooth-change allowance of it.
 
-Both velocities are taken after removing each frame's dominant-plane
-velocity (the fitted homography), which plays the role of the paper's
-observer-motion compensation: a camera's rotational jitter changes every
-velocity at once, and the plane fit absorbs it.
+The paper compensates the observer's own change of motion: a camera's
+rotational jitter changes every velocity at once. The prediction is the
+previous velocity carried on by that change, one homography fitted to how
+the sampled points moved on (:mod:`.continuation`); the test compares it
+with the velocity now, both less this frame's plane velocity (so that the
+allowance grows with the speed off the plane, not with the pan's).
 
 When the frames' times are known and the two intervals differ (frames
 dropped, a phone's variable frame rate), the previous velocity is scaled by
@@ -33,6 +35,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from motiondetect.animate.continuation import continued_velocity, sample_at
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
@@ -100,6 +103,10 @@ class VelocityAnimateConfig:
         flagged most of the frame (the fox clip: 0.42 false alarms a frame
         against 0.31). 0: over every connected moving pixel
         (docs/detectors.md).
+    change_px : float
+        RANSAC's threshold for the camera's change of motion between two
+        frames (:mod:`.continuation`), work px: 1, as the plane's (``[fit]
+        ransac_px``); the points that broke their motion lie beyond it.
     """
 
     noise_sigmas: float = 3.0
@@ -112,11 +119,12 @@ class VelocityAnimateConfig:
     evidence_sigmas: float = 3.0
     evidence_box: int = 5
     coherence: float = 1.0
+    change_px: float = 1.0
 
     def __post_init__(self) -> None:
         check_fields(
             self,
-            positive=("noise_sigmas", "floor_px", "evidence_box"),
+            positive=("noise_sigmas", "floor_px", "evidence_box", "change_px"),
             non_negative=(
                 "accel_px", "accel_relative", "open_px", "spread_px", "memory_frames",
                 "evidence_sigmas", "coherence",
@@ -128,37 +136,13 @@ class VelocityAnimateConfig:
 #: pixels between: the opening that follows removes anything thinner anyway.
 _TEST_STEP = 2
 _FOOTPRINT = np.float32([(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)])
-_ROW = 1024  # points per row of a sampling block (remap takes at most 32767 columns)
-
-
-def sample_at(image: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Bilinear samples of ``image`` at ``points``; NaN outside the frame.
-
-    Parameters
-    ----------
-    image : (h, w, 2) ndarray of float32
-    points : (N, 2) ndarray of float32, (x, y) work px
-
-    Returns
-    -------
-    (N, 2) ndarray of float32
-    """
-    n = len(points)
-    rows = -(-n // _ROW)
-    block = np.full((rows * _ROW, 2), -1.0, np.float32)
-    block[:n] = points
-    block = block.reshape(rows, _ROW, 2)
-    out = cv2.remap(
-        image, block[..., 0], block[..., 1], cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_CONSTANT, borderValue=(np.nan, np.nan),
-    )  # fmt: skip
-    return out.reshape(-1, 2)[:n]
 
 
 def footprint_excess(
     previous: np.ndarray,
     source: np.ndarray,
     residual: np.ndarray,
+    plane: np.ndarray,
     tolerance: float,
     config: VelocityAnimateConfig,
 ) -> np.ndarray:
@@ -167,11 +151,14 @@ def footprint_excess(
     Parameters
     ----------
     previous : (h, w, 2) ndarray of float32
-        The previous frame's residual velocity.
+        The velocity each previous-frame point has now if it moved on
+        smoothly (:func:`~.continuation.continued_velocity`).
     source : (N, 2) ndarray of float32
         Where each point was in the previous frame, work px.
     residual : (N, 2) ndarray of float32
         Each point's residual velocity now.
+    plane : (N, 2) ndarray of float32
+        The plane's velocity at each point now, taken off the prediction.
 
     Returns
     -------
@@ -182,7 +169,7 @@ def footprint_excess(
     """
     best = None
     for step in _FOOTPRINT:
-        predicted = sample_at(previous, source + config.spread_px * step)
+        predicted = sample_at(previous, source + config.spread_px * step) - plane
         change = np.hypot(*(residual - predicted).T)
         allowance = tolerance + config.accel_px + config.accel_relative * np.hypot(*predicted.T)
         excess = np.nan_to_num(change - allowance, nan=0.0)
@@ -290,7 +277,9 @@ def violations(
             ys, xs = ys[moving], xs[moving]
     if len(ys):
         source = field.source_px[ys, xs]
-        excess = footprint_excess(previous, source, residual[ys, xs], tolerance, config)
+        now = residual[ys, xs]
+        plane = field.velocity_px[ys, xs] - now
+        excess = footprint_excess(previous, source, now, plane, tolerance, config)
         coarse[ys // s, xs // s] = excess > 0
     mask = np.repeat(np.repeat(coarse, s, axis=0), s, axis=1)[:h, :w] & candidates
     if moving_at is not None:
@@ -339,10 +328,13 @@ class VelocityAnimateDetector:
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         cfg = self.config
         fit = field.camera if field.camera is not None else fit_camera(field, FitConfig())
-        previous, self._previous = self._previous, fit.residual_px
+        # An unjudged frame (a cut) predicts nothing, as it has no residual.
+        now = field.velocity_px if fit.residual_px is not None else None
+        previous, self._previous = self._previous, now
         interval, self._interval = self._interval, field.interval_s
+        ratio = 1.0
         if previous is not None and interval and field.interval_s:
-            previous = previous * np.float32(interval_ratio(field.interval_s, interval))
+            ratio = interval_ratio(field.interval_s, interval)
         if not fit.reliable:
             # The labels are carried along each frame's motion; a frame that
             # cannot be judged breaks that chain (as the ray filter's sum).
@@ -357,8 +349,11 @@ class VelocityAnimateDetector:
             return fit.determined_beyond_at(field, ys, xs, tolerance)
 
         candidates = speed > tolerance
+        continued = continued_velocity(
+            previous, field.pixel_grid, field.source_px, ratio, cfg.change_px
+        )
         violation = violations(
-            field, fit.residual_px, candidates, previous, tolerance, cfg, moving_at
+            field, fit.residual_px, candidates, continued, tolerance, cfg, moving_at
         )
         # The test reads two flow fields (this one and, where each point came
         # from, the previous one), each extrapolated along the frame edge.
