@@ -292,8 +292,8 @@ def violations(
 class VelocityAnimateDetector:
     """Flags velocities that break the smooth continuation of the previous frame's.
 
-    State: the previous frame's residual velocity field and the animate
-    memory (frames left, per pixel).
+    State: the previous frame's velocity field (None after a frame that
+    could not be judged) and the animate memory (frames left, per pixel).
 
     The observer motion is the field's ``camera`` (fitted once per frame by
     :class:`~motiondetect.detection.detector.MotionDetector` with its
