@@ -25,10 +25,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import ransac_homography
 
-#: Step of the grid the change is fitted on, work px (as the plane's).
-SAMPLE_STEP_PX = 8
+#: Step of the grid the change is fitted on, work px: the plane's default.
+SAMPLE_STEP_PX = FitConfig.sample_step_px
 #: Fewest samples a change is fitted to.
 MIN_SAMPLES = 16
 _ROW = 1024  # points per row of a sampling block (remap takes at most 32767 columns)

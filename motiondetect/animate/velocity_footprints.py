@@ -139,7 +139,7 @@ _FOOTPRINT = np.float32([(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)])
 
 
 def footprint_excess(
-    previous: np.ndarray,
+    continued: np.ndarray,
     source: np.ndarray,
     residual: np.ndarray,
     plane: np.ndarray,
@@ -150,7 +150,7 @@ def footprint_excess(
 
     Parameters
     ----------
-    previous : (h, w, 2) ndarray of float32
+    continued : (h, w, 2) ndarray of float32
         The velocity each previous-frame point has now if it moved on
         smoothly (:func:`~.continuation.continued_velocity`).
     source : (N, 2) ndarray of float32
@@ -169,7 +169,7 @@ def footprint_excess(
     """
     best = None
     for step in _FOOTPRINT:
-        predicted = sample_at(previous, source + config.spread_px * step) - plane
+        predicted = sample_at(continued, source + config.spread_px * step) - plane
         change = np.hypot(*(residual - predicted).T)
         allowance = tolerance + config.accel_px + config.accel_relative * np.hypot(*predicted.T)
         excess = np.nan_to_num(change - allowance, nan=0.0)
@@ -254,7 +254,7 @@ def interval_ratio(now_s: float, before_s: float) -> float:
 
 
 def violations(
-    field: VelocityField, residual: np.ndarray, candidates: np.ndarray, previous: np.ndarray,
+    field: VelocityField, residual: np.ndarray, candidates: np.ndarray, continued: np.ndarray,
     tolerance: float, config: VelocityAnimateConfig,
     moving_at: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> np.ndarray:  # fmt: skip
@@ -279,7 +279,7 @@ def violations(
         source = field.source_px[ys, xs]
         now = residual[ys, xs]
         plane = field.velocity_px[ys, xs] - now
-        excess = footprint_excess(previous, source, now, plane, tolerance, config)
+        excess = footprint_excess(continued, source, now, plane, tolerance, config)
         coarse[ys // s, xs // s] = excess > 0
     mask = np.repeat(np.repeat(coarse, s, axis=0), s, axis=1)[:h, :w] & candidates
     if moving_at is not None:
