@@ -95,22 +95,22 @@ def test_every_option_is_in_the_cli_docs():
     assert missing == []
 
 
-#: A repository path as the docs name one: a top folder of the project, then
-#: a Python file or a folder (a test may carry ``::name``).
-_NAMED_PATH = re.compile(r"(?<![\w./-])((?:motiondetect|cli|benchmarks|tests)/[\w/]*\w(?:\.py)?)")
+#: What the docs are: the README and every page under docs/.
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _in_docs(pattern: str) -> set:
+    """Every match of ``pattern`` (``re.findall``'s items) in the docs."""
+    return {m for doc in DOCS for m in re.findall(pattern, doc.read_text(encoding="utf-8"))}
 
 
 def test_every_path_the_docs_name_exists():
     """A newcomer finds the paper's sections by the files the docs name
     (docs/stages.md and docs/detectors.md had named six modules that the
     restructure of issue 14 had moved into packages)."""
-    named = {
-        (doc.name, path)
-        for doc in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-        for path in _NAMED_PATH.findall(doc.read_text(encoding="utf-8"))
-    }
+    named = _in_docs(r"(?<![\w./-])((?:motiondetect|cli|benchmarks|tests)/[\w/]*\w(?:\.py)?)")
     assert len(named) > 50  # the pattern still finds what the docs name
-    assert sorted(n for n in named if not (ROOT / n[1]).exists()) == []
+    assert sorted(path for path in named if not (ROOT / path).exists()) == []
 
 
 def _resolves(dotted: str) -> bool:
@@ -132,11 +132,7 @@ def _resolves(dotted: str) -> bool:
 def test_every_dotted_name_the_docs_give_resolves():
     """``motiondetect.x.y`` in the docs names a module or an object of one
     (docs/cli.md had sent readers to ``motiondetect.runner.run``)."""
-    named = {
-        name
-        for doc in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-        for name in re.findall(r"(?<![\w./-])motiondetect(?:\.[a-z_]\w*)+", doc.read_text("utf-8"))
-    }
+    named = _in_docs(r"(?<![\w./-])motiondetect(?:\.[a-z_]\w*)+")
     assert len(named) > 5
     assert sorted(n for n in named if not _resolves(n)) == []
 
@@ -144,24 +140,21 @@ def test_every_dotted_name_the_docs_give_resolves():
 def test_every_test_the_docs_cite_exists():
     """``test_x.py::test_y`` in the docs names a test of that file (a name
     ending in ``_`` names the tests it begins)."""
-    cited = {
-        match
-        for doc in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-        for match in re.findall(r"(test_\w+\.py)::(\w+)", doc.read_text("utf-8"))
-    }
+    cited = _in_docs(r"(test_\w+\.py)::(\w+)")
     assert len(cited) > 20
-    defined = {
-        (path.name, node.name)
-        for path in (ROOT / "tests").glob("test_*.py")
-        for node in ast.walk(ast.parse(path.read_text("utf-8")))
-        if isinstance(node, (ast.FunctionDef, ast.ClassDef))
-    }
+    defined: dict[str, set[str]] = {}
+    for path in (ROOT / "tests").glob("test_*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defined[path.name] = {
+            node.name
+            for node in ast.walk(tree)
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef))
+        }
     stale = [
         f"{file}::{name}"
         for file, name in sorted(cited)
         if not any(
-            f == file and (d == name or name.endswith("_") and d.startswith(name))
-            for f, d in defined
+            d == name or (name.endswith("_") and d.startswith(name)) for d in defined.get(file, ())
         )
     ]
     assert stale == []
