@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import cv2
@@ -24,7 +23,7 @@ import cv2
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from common import SHARED_DATA, make_pan_clip, mog2_on  # noqa: E402
-from throughput import run_detect  # noqa: E402
+from throughput import best_rate, run_detect  # noqa: E402
 
 #: Name -> the settings ``detect`` runs with (as in a config file or on the command line).
 SETTINGS = {
@@ -36,14 +35,21 @@ SETTINGS = {
 }
 
 
-def best_rate(run, repeat: int) -> float:
-    """Frames per second of the fastest of ``repeat`` calls of ``run`` (which returns frames)."""
-    times, frames = [], 0
-    for _ in range(repeat):
-        start = time.perf_counter()
-        frames = run()
-        times.append(time.perf_counter() - start)
-    return frames / min(times)
+def report(clip: Path, tmp: Path, repeat: int) -> None:
+    """MOG2, then ``detect`` under each of :data:`SETTINGS` with and without
+    the video, on ``clip`` with OpenCV's threads as they are set."""
+    mog = best_rate(lambda: mog2_on(clip), repeat)
+    print(f"\n{clip.name}, cv2 threads = {cv2.getNumThreads()}: MOG2 {mog:.1f} frames/s")
+    for video in (False, True):
+        for name, options in SETTINGS.items():
+            rate = best_rate(
+                lambda v=video, o=options: run_detect(
+                    clip, tmp / "out", video=v, timeline=False, **o
+                ),
+                repeat,
+            )
+            what = f"{name}, {'H.264 video' if video else 'no video'}"
+            print(f"  {what:42s} {rate:6.1f} frames/s  {rate / mog:.2f}x MOG2")
 
 
 def main() -> None:
@@ -59,19 +65,7 @@ def main() -> None:
         for clip in clips:
             for threads in (1, -1):
                 cv2.setNumThreads(threads)
-                mog = best_rate(lambda c=clip: mog2_on(c), args.repeat)
-                threads_now = cv2.getNumThreads()
-                print(f"\n{clip.name}, cv2 threads = {threads_now}: MOG2 {mog:.1f} frames/s")
-                for video in (False, True):
-                    for name, options in SETTINGS.items():
-                        rate = best_rate(
-                            lambda c=clip, v=video, o=options: run_detect(
-                                c, tmp / "out", video=v, timeline=False, **o
-                            ),
-                            args.repeat,
-                        )
-                        what = f"{name}, {'H.264 video' if video else 'no video'}"
-                        print(f"  {what:42s} {rate:6.1f} frames/s  {rate / mog:.2f}x MOG2")
+                report(clip, tmp, args.repeat)
 
 
 if __name__ == "__main__":

@@ -119,17 +119,21 @@ def run_detect(path: Path, out: Path, **options) -> int:
     return result.summary["totals"]["frames"]
 
 
+def best_rate(run, repeat: int) -> float:
+    """Frames per second of the fastest of ``repeat`` calls of ``run`` (which returns frames)."""
+    times, frames = [], 0
+    for _ in range(repeat):
+        start = time.perf_counter()
+        frames = run()
+        times.append(time.perf_counter() - start)
+    return frames / min(times)
+
+
 def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
     rows = []
 
     def best(fn) -> float:
-        times = []
-        n = 0
-        for _ in range(repeat):
-            t = time.perf_counter()
-            n = fn()
-            times.append(time.perf_counter() - t)
-        return n / min(times)
+        return best_rate(fn, repeat)
 
     rows.append(("decode only, OpenCV", best(lambda: decode_only(clip))))
     rows.append(("decode only, PyAV (the tool's decoder)", best(lambda: decode_pyav(clip))))
