@@ -1,10 +1,10 @@
-"""OpenCV's 4:2:0 colour conversion agrees with FFmpeg's, at both ranges."""
+"""OpenCV's 4:2:0 colour conversion agrees with FFmpeg's, at both ranges and 8 or 10 bits."""
 
 import av
 import numpy as np
 import pytest
 
-from motiondetect.io.colour import bgr_to_frame, frame_to_bgr
+from motiondetect.io.colour import FULL_RANGE, bgr_to_frame, frame_to_bgr
 
 
 def _picture(h: int = 64, w: int = 96) -> np.ndarray:
@@ -13,7 +13,7 @@ def _picture(h: int = 64, w: int = 96) -> np.ndarray:
     return np.dstack([x / w * 255, y / h * 255, (x + y) / (w + h) * 255]).astype(np.uint8)
 
 
-@pytest.mark.parametrize("pix_fmt", ["yuv420p", "yuvj420p"])
+@pytest.mark.parametrize("pix_fmt", ["yuv420p", "yuvj420p", "yuv420p10le"])
 def test_four_two_zero_matches_swscale(pix_fmt):
     frame = av.VideoFrame.from_ndarray(_picture(), format="bgr24").reformat(format=pix_fmt)
     ours = frame_to_bgr(frame).astype(int)
@@ -38,6 +38,34 @@ def test_grey_levels_at_each_range(pix_fmt, luma, grey):
     planes[:64] = luma
     frame = av.VideoFrame.from_ndarray(planes, format=pix_fmt)
     assert np.abs(frame_to_bgr(frame).astype(int) - grey).max() <= 1
+
+
+def _flat(pix_fmt: str, luma: int, chroma: int, full: bool) -> av.VideoFrame:
+    """A 64x64 frame of one grey: every luma sample ``luma``, chroma ``chroma``."""
+    planes = np.full((96, 64), chroma, np.uint16 if "10" in pix_fmt else np.uint8)
+    planes[:64] = luma
+    frame = av.VideoFrame.from_ndarray(planes, format=pix_fmt)
+    frame.color_range = FULL_RANGE if full else 0
+    return frame
+
+
+@pytest.mark.parametrize(
+    ("pix_fmt", "luma", "chroma", "full", "grey"),
+    [
+        ("yuv420p10le", 64, 512, False, 0),  # video range, 10 bits: 64-940
+        ("yuv420p10le", 256, 512, False, 56),  # 8-bit 64 at video range
+        ("yuv420p10le", 940, 512, False, 255),
+        ("yuv420p10le", 256, 512, True, 64),  # full range, flagged
+        ("yuv420p", 64, 128, True, 64),  # HEVC's full range: yuv420p, flagged
+        ("yuv420p", 192, 128, True, 192),
+    ],
+)
+def test_ten_bits_and_flagged_full_range(pix_fmt, luma, chroma, full, grey):
+    frame = _flat(pix_fmt, luma, chroma, full)
+    ours = frame_to_bgr(frame).astype(int)
+    assert ours.dtype == int and np.abs(ours - grey).max() <= 1
+    # swscale's 10-bit path rounds its own way (940, white, to 253)
+    assert np.abs(ours - frame.to_ndarray(format="bgr24").astype(int)).max() <= 2
 
 
 def test_odd_sizes_and_other_formats_still_convert():
