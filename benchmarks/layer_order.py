@@ -21,7 +21,6 @@ import argparse
 from multiprocessing import Pool
 
 import compare
-import cv2
 
 from motiondetect.constraint_ray.camera_fit import fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
@@ -36,10 +35,7 @@ def verdicts(job: tuple[str, object]) -> tuple[str, list[int], int]:
     measuring, order, out, longest = MotionDetector("both"), LayerOrder(config), [], 0
     with open_source(source) as frames:
         for frame in frames:
-            image = frame.image
-            if image.ndim == 2:
-                image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
-            field = measuring.measure_frame(image)
+            field = measuring.measure_frame(frame.grey)
             if field is None or not hasattr(field, "velocity_px"):
                 order.reset()
                 continue

@@ -51,7 +51,7 @@ def _run(job: tuple) -> tuple[str, tuple[int, int, int, int, int]]:
     found = parts = movers = frames = lost = 0
     with open_source(source) as video:
         for frame in video:
-            pred = ours(frame.image, frame.time_s)
+            pred = ours(frame.grey, frame.time_s)
             if frame.index < compare.WARMUP or frame.index not in masks:
                 continue
             truth = read_mask(masks[frame.index])

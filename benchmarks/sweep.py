@@ -87,7 +87,7 @@ def scored_frames(job: tuple, detector: MotionDetector | None = None):
     detector = detector or MotionDetector("both", *sections)
     with open_source(source) as frames:
         for frame in frames:
-            result = detector.process(frame.image, frame.index, frame.time_s)
+            result = detector.process(frame.grey, frame.index, frame.time_s)
             if frame.index >= compare.WARMUP and frame.index in masks:
                 yield result, read_mask(masks[frame.index])
 

@@ -51,7 +51,7 @@ def _run(job: tuple) -> tuple[str, int, int, int, int]:
     ids: list[int] = []
     with open_source(source) as frames:
         for frame in frames:
-            regions = detector.process(frame.image, frame.index, frame.time_s).regions
+            regions = detector.process(frame.grey, frame.index, frame.time_s).regions
             if frame.index < compare.WARMUP or frame.index not in masks:
                 continue
             track = main_id(read_mask(masks[frame.index]), regions)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import struct
 from fractions import Fraction
 from pathlib import Path
 
@@ -74,3 +75,18 @@ def pts_times(path: Path) -> list[float]:
         stream = container.streams.video[0]
         start = float((stream.start_time or 0) * stream.time_base)
         return [frame.time - start for frame in container.decode(stream)]
+
+
+def turned_quarter(path: Path, out: Path) -> Path:
+    """A copy of the MP4 at ``path`` whose track header asks players to turn
+    it a quarter turn (a 90-degree display matrix, as phones write it)."""
+    data = bytearray(path.read_bytes())
+    box = data.find(b"tkhd") - 4
+    version = data[box + 8]
+    matrix = box + 8 + 4 + (20 if version == 0 else 32) + 8 + 8
+    assert struct.unpack(">9i", data[matrix : matrix + 36])[0] == 0x00010000  # identity
+    data[matrix : matrix + 36] = struct.pack(
+        ">9i", 0, 0x00010000, 0, -0x00010000, 0, 0, 0, 0, 0x40000000
+    )
+    out.write_bytes(bytes(data))
+    return out

@@ -14,7 +14,7 @@ from motiondetect_cli.main import main
 from motiondetect.io.video import open_source
 
 from .cli_outputs import check_outputs, write_video
-from .media import encode
+from .media import encode, turned_quarter
 from .scenes import scene
 
 
@@ -207,19 +207,8 @@ def test_variable_frame_rate_times_come_from_timestamps(tmp_path, frames):
 
 def test_rotation_metadata_is_applied_and_reported(tmp_path, frames):
     """A 90-degree display matrix in the MP4 track header (as phones write it)."""
-    import struct
-
     path = write_video(tmp_path / "upright.mp4", frames[:6])
-    data = bytearray(path.read_bytes())
-    box = data.find(b"tkhd") - 4
-    version = data[box + 8]
-    matrix = box + 8 + 4 + (20 if version == 0 else 32) + 8 + 8
-    assert struct.unpack(">9i", data[matrix : matrix + 36])[0] == 0x00010000  # identity
-    data[matrix : matrix + 36] = struct.pack(
-        ">9i", 0, 0x00010000, 0, -0x00010000, 0, 0, 0, 0, 0x40000000
-    )
-    rotated = tmp_path / "phone.mp4"
-    rotated.write_bytes(bytes(data))
+    rotated = turned_quarter(path, tmp_path / "phone.mp4")
     result = run("detect", rotated, "-o", tmp_path / "o", "-q")
     assert result.exit_code == 0, result.output
     summary = check_outputs(tmp_path / "o" / "phone", 6)

@@ -130,7 +130,11 @@ def test_woman_mp4_completes(tmp_path):
             continue
         x, y, w, h = max(record["detections"], key=lambda d: d["area_px"])["bbox"]
         assert w * h < 0.5 * 352 * 288  # a box on her, not on the whole picture
-        assert x < 200 and x + w > 130 and y < 190 and y + h > 110  # where she walks
+        # Where she walks. At the turn's end (447-450) she is at x 96-148, and
+        # on some RANSAC draws one of those frames boxes only her upper body
+        # (measured over seeds 0-7: 3 draws reading the luma, 1 the BGR made
+        # grey; seed 0's frame 449: x 95-125, y 78-116).
+        assert x < 200 and x + w > 120 and y < 190 and y + h > 110
     # Soft frames are judged (blur_ratio 0): the turn's last frames, and the
     # zoom onto her after it, where she walks at x 210-290. Measured: every
     # frame of the turn, 8 of the zoom's 10 frames, each with her box only.

@@ -52,7 +52,7 @@ def write_thumbnails(path: Path, out_dir: Path, events: list[dict], settings: Se
 
 
 def _annotated_result(detector: MotionDetector | None, frame: SourceFrame):
-    return detector.process(frame.image, frame.index, frame.time_s) if detector else None
+    return detector.process(frame.grey, frame.index, frame.time_s) if detector else None
 
 
 def extract_clips(path: Path, clip_dir: Path, events: list[dict], settings: Settings) -> list[Path]:

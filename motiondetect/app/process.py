@@ -43,7 +43,6 @@ from motiondetect.io.video import (
     VideoError,
     VideoSink,
     open_source,
-    to_display,
     write_image,
 )
 
@@ -205,7 +204,8 @@ class _FrameWriters:
 
     def _draw(self, item: tuple[SourceFrame, FrameResult]) -> tuple:
         frame, result = item
-        return annotate(to_display(frame.image), result, self.size, self._trails), frame.time_s
+        picture, whole = frame.picture(self.size), (self.info.width, self.info.height)
+        return annotate(picture, result, self.size, self._trails, whole), frame.time_s
 
     def close(self, ok: bool) -> None:
         with self._files:

@@ -58,9 +58,16 @@ def judged_groups(frames: Iterable[F], every: int) -> Iterator[tuple[list[F], F 
 
 
 def measured(group: tuple, measure) -> tuple:
-    """``(held, frame, measure(frame.image))`` for one of :func:`judged_groups`."""
+    """``(held, frame, measure(picture))`` for one of :func:`judged_groups`,
+    the picture :func:`measured_picture`."""
     held, frame = group
-    return held, frame, (None if frame is None else measure(frame.image))
+    return held, frame, (None if frame is None else measure(measured_picture(frame)))
+
+
+def measured_picture(frame) -> object:
+    """What the measurement reads of a frame: its ``grey``, else its ``image``."""
+    grey = getattr(frame, "grey", None)
+    return frame.image if grey is None else grey
 
 
 def measured_ahead(groups: Iterable[tuple], measure) -> Iterator[tuple]:

@@ -13,6 +13,7 @@ import numpy as np
 from motiondetect.constraint_ray.hough import REGIONS, STILL, UNKNOWN
 from motiondetect.detection.detector import FrameResult
 from motiondetect.io.colours import CLASS_COLOURS, DETECTOR_COLOURS, LEGEND
+from motiondetect.io.source import fitted
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 _LEFT_OUT = (160, 160, 160)  # the outline of a caption or logo left out
@@ -80,16 +81,19 @@ class Trails:
 
 
 def annotate(
-    image: np.ndarray, result: FrameResult, size: tuple[int, int], trails: Trails | None = None
+    image: np.ndarray,
+    result: FrameResult,
+    size: tuple[int, int],
+    trails: Trails | None = None,
+    input_size: tuple[int, int] | None = None,
 ) -> np.ndarray:
     """Draw ``result`` on a copy of ``image`` resized to ``size`` (width, height);
-    with ``trails``, fed this frame first, each track's recent path too."""
-    h0, w0 = image.shape[:2]
-    if (w0, h0) == size:
-        out = image.copy()
-    else:  # area-averaged when reduced, interpolated when enlarged
-        smaller = size[0] < w0
-        out = cv2.resize(image, size, interpolation=cv2.INTER_AREA if smaller else cv2.INTER_LINEAR)
+    with ``trails``, fed this frame first, each track's recent path too.
+    ``input_size``: the input's (width, height), when ``image`` is not at it
+    (already reduced: :meth:`~motiondetect.io.source.SourceFrame.picture`)."""
+    out = fitted(image, size)
+    out = out.copy() if out is image else out
+    w0, h0 = input_size or (image.shape[1], image.shape[0])
     sx, sy = size[0] / w0, size[1] / h0
     if result.flagged_pixels.any():
         flagged = result.input_mask(*size)

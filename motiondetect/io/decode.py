@@ -29,12 +29,13 @@ import re
 import stat
 import sys
 from collections.abc import Iterator
+from functools import cached_property
 from pathlib import Path
 
 import av
 import numpy as np
 
-from motiondetect.io.colour import frame_to_bgr
+from motiondetect.io.colour import frame_to_bgr, frame_to_bgr_at, frame_to_grey
 from motiondetect.io.source import (
     DEFAULT_FRAMES_FPS,
     FrameSource,
@@ -182,17 +183,17 @@ class AvSource(FrameSource):
         if first is None:
             raise VideoError(self._nothing_decoded(name))
         self._turns = round((first.rotation or 0) / 90) % 4  # counter-clockwise quarter turns
-        image = self._image(first)
-        check_size(image.shape[1], image.shape[0], name)
+        width, height = (first.width, first.height)[:: -1 if self._turns % 2 else 1]
+        check_size(width, height, name)
         fps, fps_source = _frame_rate(stream)
         self.info = VideoInfo(
-            name, "video" if self.seekable else "stream", image.shape[1], image.shape[0],
+            name, "video" if self.seekable else "stream", width, height,
             fps, max(0, stream.frames or 0), stream.codec_context.name,
             (-90 * self._turns) % 360, fps_source, self._graph is not None,
         )  # fmt: skip
         start = stream.start_time
         self._origin = float(start * stream.time_base) if start is not None else first.time or 0
-        self._first = (first, image)
+        self._first = first
 
     def _nothing_decoded(self, name: str) -> str:
         if not self.seekable and "mp4" in self._container.format.name.split(","):
@@ -246,17 +247,12 @@ class AvSource(FrameSource):
             except (BlockingIOError, av.error.EOFError):
                 return
 
-    def _image(self, frame: av.VideoFrame) -> np.ndarray:
-        image = frame_to_bgr(frame)
-        return np.ascontiguousarray(np.rot90(image, self._turns)) if self._turns else image
-
     def __iter__(self) -> Iterator[SourceFrame]:
-        first, image = self._first
         clock = _Clock(self.name, self._origin, self.info.fps)
-        yield SourceFrame(0, clock.time(first), image)
+        yield DecodedFrame(0, clock.time(self._first), self._first, self._turns)
         index = 1
         for frame in self._decoded:
-            yield SourceFrame(index, clock.time(frame), self._image(frame))
+            yield DecodedFrame(index, clock.time(frame), frame, self._turns)
             index += 1
         self._finish(index)
 
@@ -271,6 +267,40 @@ class AvSource(FrameSource):
 
     def close(self) -> None:
         self._container.close()
+
+
+class DecodedFrame(SourceFrame):
+    """A frame of :class:`AvSource`: its BGR ``image`` and its ``grey`` are
+    made from FFmpeg's frame when first read, each once, and turned as the
+    container asks. The measurement reads only ``grey``, the luma plane
+    (:func:`~.colour.frame_to_grey`), and the annotated video its
+    :meth:`picture`, converted at the video's size on the drawing thread, so
+    no frame is converted to colour whole.
+    """
+
+    def __init__(self, index: int, time_s: float, frame: av.VideoFrame, turns: int) -> None:
+        for name, value in (("index", index), ("time_s", time_s), ("number", None)):
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "_decoded", (frame, turns))
+
+    @cached_property
+    def image(self) -> np.ndarray:  # type: ignore[override]
+        frame, turns = self._decoded
+        return _turned(frame_to_bgr(frame), turns)
+
+    @cached_property
+    def grey(self) -> np.ndarray:  # type: ignore[override]
+        frame, turns = self._decoded
+        return _turned(frame_to_grey(frame), turns)
+
+    def picture(self, size: tuple[int, int]) -> np.ndarray:
+        frame, turns = self._decoded
+        return _turned(frame_to_bgr_at(frame, size[:: -1 if turns % 2 else 1]), turns)
+
+
+def _turned(image: np.ndarray, turns: int) -> np.ndarray:
+    """``image`` turned ``turns`` quarter turns counter-clockwise."""
+    return np.ascontiguousarray(np.rot90(image, turns)) if turns else image
 
 
 class _Clock:

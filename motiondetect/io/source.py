@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 
+import cv2
 import numpy as np
 
 IMAGE_EXTENSIONS = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff"}
@@ -63,6 +64,38 @@ class SourceFrame:
     time_s: float  # from the stream's timestamps, 0 at the stream's start
     image: np.ndarray
     number: int | None = None  # the number in a frame file's name
+
+    @property
+    def grey(self) -> np.ndarray:
+        """What the measurement reads: here the image itself, which the
+        pipeline makes grey (a decoded video's frames give their luma)."""
+        return self.image
+
+    def picture(self, size: tuple[int, int]) -> np.ndarray:
+        """The image as 8-bit BGR at ``size`` (width, height), for drawing
+        (:func:`fitted`; a decoded video's frames convert only that many pixels)."""
+        return fitted(to_display(self.image), size)
+
+
+def to_display(image: np.ndarray) -> np.ndarray:
+    """Any input frame as 8-bit BGR for drawing and encoding."""
+    if image.dtype == np.uint16:
+        image = (image >> 8).astype(np.uint8)
+    if image.ndim == 2 or image.shape[2] == 1:
+        return cv2.cvtColor(image.reshape(image.shape[:2]), cv2.COLOR_GRAY2BGR)
+    if image.shape[2] == 4:
+        return cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+    return image
+
+
+def fitted(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """``image`` at ``size`` (width, height): area-averaged when reduced,
+    interpolated when enlarged; itself when already that size."""
+    h, w = image.shape[:2]
+    if (w, h) == size:
+        return image
+    smaller = size[0] < w
+    return cv2.resize(image, size, interpolation=cv2.INTER_AREA if smaller else cv2.INTER_LINEAR)
 
 
 class FrameSource:

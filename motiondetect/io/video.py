@@ -27,6 +27,7 @@ from motiondetect.io.source import (
     SourceFrame,
     VideoError,
     VideoInfo,
+    to_display,
 )
 
 __all__ = [
@@ -82,17 +83,6 @@ def is_animated(path: Path) -> bool:
             return sum(1 for _, _ in zip(range(2), packets)) == 2
     except (av.error.FFmpegError, OSError, IndexError, ValueError):
         return False
-
-
-def to_display(image: np.ndarray) -> np.ndarray:
-    """Any input frame as 8-bit BGR for drawing and encoding."""
-    if image.dtype == np.uint16:
-        image = (image >> 8).astype(np.uint8)
-    if image.ndim == 2 or image.shape[2] == 1:
-        return cv2.cvtColor(image.reshape(image.shape[:2]), cv2.COLOR_GRAY2BGR)
-    if image.shape[2] == 4:
-        return cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
-    return image
 
 
 def write_image(path: Path, image: np.ndarray) -> None:
