@@ -4,7 +4,13 @@ import av
 import numpy as np
 import pytest
 
-from motiondetect.io.colour import FULL_RANGE, bgr_to_frame, frame_to_bgr
+from motiondetect.io.colour import (
+    FULL_RANGE,
+    GREY_SCALE,
+    bgr_to_frame,
+    frame_to_bgr,
+    frame_to_grey,
+)
 
 
 def _picture(h: int = 64, w: int = 96) -> np.ndarray:
@@ -79,3 +85,13 @@ def test_encoder_frames_round_trip():
     frame = bgr_to_frame(_picture())
     assert frame.format.name == "yuv420p" and (frame.width, frame.height) == (96, 64)
     assert np.abs(frame_to_bgr(frame).astype(int) - _picture()).mean() < 1.5
+
+
+def test_luma_to_grey_is_the_rounded_clipped_scale():
+    """Every luma level, in a row as wide as 4K, maps to round((Y - 16) * 255 / 219), clipped."""
+    levels = np.tile(np.arange(256, dtype=np.uint8), 15)[None, :3840].repeat(4, axis=0)
+    frame = av.VideoFrame.from_ndarray(
+        np.vstack([levels, np.full((2, 3840), 128, np.uint8)]), format="yuv420p"
+    )
+    expected = np.clip(np.rint((levels.astype(float) - 16) * GREY_SCALE), 0, 255)
+    assert np.array_equal(frame_to_grey(frame), expected.astype(np.uint8))
