@@ -115,7 +115,9 @@ def frame_to_grey(frame: av.VideoFrame) -> np.ndarray:
     luma = _plane(frame, 0)
     eight = _eight_bits(luma)
     if _full_range(frame):
-        return eight.copy() if eight is luma else eight  # not the decoder's buffer
+        # a copy: the decoder may still read its buffer as a reference picture,
+        # and the measurement may keep or crop what it is given
+        return eight.copy() if eight is luma else eight
     # rounded and clipped as a table would, in a third of cv2.LUT's time at 4K
     return cv2.addWeighted(eight, GREY_SCALE, eight, 0.0, -16 * GREY_SCALE)
 
