@@ -12,8 +12,10 @@ a fresh interpreter:
 * ``ahead-pool1``: measuring ahead, OpenCV's own pool at one thread (DIS
   cannot spread over the core the judging thread needs).
 
-It prints the wall time, the time inside ``measure_frame`` and ``judge``
-and the process's CPU time, each in ms per frame.
+It prints the wall time, the time inside ``measure_frame``, ``prepare``
+(on the measuring thread while the judging one is busy; what it leaves,
+``judge`` does) and ``judge``, and the process's CPU time, each in ms per
+frame.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ if mode == "ahead-pool1":
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.io.video import open_source
 detector = MotionDetector("both")
-spent = {"measure_frame": 0.0, "judge": 0.0}
+spent = {"measure_frame": 0.0, "prepare": 0.0, "judge": 0.0}
 for name in spent:
     call = getattr(detector, name)
     def timed(*args, _call=call, _name=name):
@@ -61,7 +63,10 @@ def main() -> None:
     parser.add_argument("clip")
     parser.add_argument("--rounds", type=int, default=3)
     args = parser.parse_args()
-    print(f"{'mode':<12} {'wall':>7} {'measure':>7} {'judge':>7} {'cpu':>7}  (ms per frame)")
+    print(
+        f"{'mode':<12} {'wall':>7} {'measure':>7} {'prepare':>7} {'judge':>7} {'cpu':>7}"
+        "  (ms per frame)"
+    )
     for _ in range(args.rounds):
         for mode in MODES:
             run = [sys.executable, "-c", _CHILD, args.clip, mode]

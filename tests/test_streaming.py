@@ -5,6 +5,7 @@ judging one frame in N, and errors while judging.
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
 
 import cv2
@@ -23,15 +24,25 @@ def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch, measu
     frames = scene("pan", ("smooth", "animate"), frames=16)
     serial = MotionDetector("both", measure=measure)
     expected = [serial.process(fr.image, fr.index, fr.index / 30) for fr in frames]
-    threads = set()
+    threads, prepared = set(), []
     ahead = MotionDetector("both", measure=measure)
-    measure = ahead.measure_frame
+    measure, prepare, judge = ahead.measure_frame, ahead.prepare, ahead.judge
 
     def measure_and_note(image):
         threads.add(threading.current_thread().name)
         return measure(image)
 
+    def prepare_and_note(flow, stop=None):
+        prepared.append(threading.current_thread().name)
+        return prepare(flow, stop)
+
+    def slow_judge(*args):  # the judging half the slower: the measuring thread prepares
+        time.sleep(0.02)
+        return judge(*args)
+
     monkeypatch.setattr(ahead, "measure_frame", measure_and_note)
+    monkeypatch.setattr(ahead, "prepare", prepare_and_note)
+    monkeypatch.setattr(ahead, "judge", slow_judge)
     before = cv2.getNumThreads()
     cv2.setNumThreads(2)
     try:
@@ -40,6 +51,8 @@ def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch, measu
     finally:
         cv2.setNumThreads(before)
     assert threads and all(name.startswith("measure") for name in threads)
+    assert len(prepared) >= len(frames) - 1  # all but perhaps the first, ahead
+    assert all(name.startswith("measure") for name in prepared)
     assert [f.index for f, _ in streamed] == [fr.index for fr in frames]
     assert sum(len(r.regions) for r in expected) > 0
     for want, (_, got) in zip(expected, streamed, strict=True):
@@ -121,3 +134,30 @@ def test_an_error_while_judging_stops_the_reading_thread_before_it_propagates(mo
     finally:
         cv2.setNumThreads(before)
     assert readers == []
+
+
+def test_work_prepared_ahead_falls_to_whichever_thread_has_time():
+    """``prepare`` runs on the measuring thread while the user is busy with
+    the group before, and is left to the user when it already waits."""
+    from motiondetect.detection.streaming import measured_ahead
+
+    def run(measure_s: float, use_s: float) -> list[str]:
+        prepared = []
+
+        def measure(picture):
+            time.sleep(measure_s)
+            return picture
+
+        def prepare(flow, stop):
+            assert not stop()  # the user is busy
+            prepared.append(threading.current_thread().name)
+            return flow
+
+        groups = [([], SourceFrame(i, i / 30, np.zeros((8, 8), np.uint8))) for i in range(6)]
+        for _ in measured_ahead(groups, measure, prepare):
+            time.sleep(use_s)
+        return prepared
+
+    busy = run(0.0, 0.05)  # the user the slower: prepared ahead
+    assert len(busy) >= 5 and all(name.startswith("measure") for name in busy)
+    assert run(0.05, 0.0) == []  # the user waits: measurements go to it at once

@@ -138,15 +138,29 @@ def test_a_judged_field_keeps_the_maps_already_computed():
     assert judged.source_px is source and judged.velocity_px is field.velocity_px
 
 
-def test_a_measured_field_comes_with_its_maps_already_made():
+def test_a_prepared_field_comes_with_its_maps_and_the_fits_first_part():
+    from motiondetect.constraint_ray.ahead import Ahead, ahead_of
+
     detector = MotionDetector("both")
     assert detector.measure_frame(background(0.0)) is None
-    field = detector.measure_frame(background(3.0, 1.0))
+    measured = detector.measure_frame(background(3.0, 1.0))
+    assert not {"structure", "source_px"} & set(vars(measured))  # made when first read
+    field = detector.prepare(measured)
     assert {"structure", "source_px"} <= set(vars(field))  # made, not waiting
+    assert isinstance(field.ahead, Ahead) and field.ahead.config == detector.fit_config
     fresh = field_between(background(0.0), background(3.0, 1.0))
     np.testing.assert_array_equal(field.source_px, fresh.source_px)
     for made, again in zip(field.structure, fresh.structure, strict=True):
         np.testing.assert_array_equal(made, again)
+    # The fit reads what was prepared, and a fit with other settings its own.
+    other = FitConfig(tight_px=0.0, sample_step_px=16)
+    assert ahead_of(field, detector.fit_config) is field.ahead
+    assert len(ahead_of(field, other).points) < len(field.ahead.points)
+    for config in (detector.fit_config, other):
+        fit, again = fit_camera(field, config), fit_camera(fresh, config)
+        np.testing.assert_array_equal(fit.homography, again.homography)
+        np.testing.assert_array_equal(fit.residual_px, again.residual_px)
+        assert (fit.inlier_share, fit.noise_px) == (again.inlier_share, again.noise_px)
 
 
 @pytest.mark.parametrize("shape", [(48, 64, 2), (300, 2), (2,)])

@@ -27,22 +27,19 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from motiondetect.constraint_ray.ahead import Ahead, ahead_of, plane_maps
 from motiondetect.constraint_ray.epipole import fit_epipole, off_ray
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
     MEDIAN_TO_SIGMA,
-    explained_share,
-    fit_homography,
     fit_homography_without,
     frame_spread,
     plane_error,
-    plane_residual,
-    samples,
 )
 from motiondetect.detection.regions import true_pixels
 from motiondetect.measurement.aperture import determined
 from motiondetect.measurement.dense_flow import VelocityField, vector_length
-from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
+from motiondetect.measurement.image_change import difference_noise
 
 #: The plane's median speed below which a frame without parallax counts as
 #: static, px/frame.
@@ -282,21 +279,15 @@ def fit_camera(
     CameraFit
         With ``reason`` set (and no residual) when the frame cannot be judged.
     """
-    points, velocity = samples(field, config.sample_step_px)
-    speed = float(np.median(np.hypot(velocity[:, 0], velocity[:, 1]))) if len(points) else 0.0
-    homography, inliers, voted, voters = _plane(points, velocity, movers, occluder, config)
-    difference = None if homography is None else plane_difference(field, homography)
-    change_noise = None if difference is None else difference_noise(difference)
-    residual = sampled = None
-    share, energy = (float(inliers.mean()) if len(inliers) else 0.0), 0.0
-    if homography is not None:
-        residual = plane_residual(field, homography)
-        step = config.sample_step_px
-        sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
-        energy = (config.aperture_noise * change_noise) ** 2
-        share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
-    cut, sharp, blurred = _cut_and_blur(field, difference, reference_sharpness, config)
-    reason = _reason(homography, share, speed, field.searched_px, cut, blurred, config)
+    ahead = ahead_of(field, config)
+    points, velocity, speed = ahead.points, ahead.velocity, ahead.speed
+    homography, inliers, voted, voters = _plane(ahead, movers, occluder, config)
+    kept = homography is ahead.voted[0]  # most frames: what the voted plane leaves is known
+    maps = ahead.maps if kept else plane_maps(field, homography, inliers, config)
+    difference, residual, sampled, share = maps.difference, maps.residual, maps.sampled, maps.share
+    sharp = ahead.sharpness
+    blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
+    reason = _reason(homography, share, speed, field.searched_px, maps.cut, blurred, config)
     edge = config.edge_px + speed
     if reason:
         return CameraFit(
@@ -309,7 +300,7 @@ def fit_camera(
     spread = _spread(points, magnitude, voters, movers, config)
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
-        change_noise, sharp, energy, float(np.median(vector_length(velocity - sampled))),
+        maps.change_noise, sharp, maps.energy, float(np.median(vector_length(velocity - sampled))),
         voted[0], voted[1],
     )  # fmt: skip
 
@@ -334,24 +325,8 @@ def _at_samples(mask: np.ndarray | None, points: np.ndarray) -> np.ndarray | Non
     return None if mask is None else mask[points[:, 1].astype(int), points[:, 0].astype(int)]
 
 
-def _cut_and_blur(
-    field: VelocityField,
-    difference: np.ndarray | None,
-    reference_sharpness: float | None,
-    config: FitConfig,
-) -> tuple[float, float, bool]:
-    """The mean plane difference (a cut's test), the frame's sharpness (0
-    while the blur test is off) and whether it is blurred against the
-    ``reference_sharpness``."""
-    cut = 0.0 if difference is None else float(difference[8:-8, 8:-8].mean())
-    sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0
-    blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
-    return cut, sharp, blurred
-
-
 def _plane(
-    points: np.ndarray,
-    velocity: np.ndarray,
+    ahead: Ahead,
     movers: np.ndarray | None,
     occluder: tuple[np.ndarray, np.ndarray] | None,
     config: FitConfig,
@@ -362,7 +337,7 @@ def _plane(
     samples vote for, with its inliers; and the samples the plane kept was
     fitted to (all of them unless it is the refit without the movers)."""
     kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
-    voted = fit_homography(points, velocity, config.ransac_px, **kwargs)
+    points, velocity, voted = ahead.points, ahead.velocity, ahead.voted
     on_movers = np.zeros(len(points), bool)
     if occluder is not None:  # the tracks found while it held the plane lie off it
         front, behind = (plane_error(points, velocity, h) for h in occluder)

@@ -22,75 +22,32 @@ from collections.abc import Iterable, Iterator
 import cv2
 import numpy as np
 
+from motiondetect.constraint_ray.ahead import fitted_ahead
 from motiondetect.constraint_ray.camera_fit import CUT, CameraFit, fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.layer_order import LayerOrder
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection import streaming
-from motiondetect.detection.base import DETECTOR_SETS, DetectorOutput, cells_from_mask, registry
+from motiondetect.detection.base import DETECTOR_SETS, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.frame_result import FrameResult
 from motiondetect.detection.framing import Framing
+from motiondetect.detection.fusion import fuse, object_region
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, group_objects
-from motiondetect.detection.regions import Region, find_regions, regions_mask
+from motiondetect.detection.regions import Region, regions_mask
 from motiondetect.detection.rigid_depth import RigidDepth
 from motiondetect.detection.screen_fixed import ScreenFixed, without_overlay
 from motiondetect.detection.shaping import CHANGE_BOX, InteriorMotion
 from motiondetect.detection.streaming import F
 from motiondetect.detection.tracking import Tracker
 from motiondetect.measurement.dense_flow import DenseFlow, DenseFlowConfig, VelocityField
-from motiondetect.measurement.normal_flow import GridGeometry, NormalFlowPipeline, StageConfig
+from motiondetect.measurement.normal_flow import NormalFlowPipeline, StageConfig
 from motiondetect.measurement.picture import Picture
 from motiondetect.measurement.repeats import REPEAT
 from motiondetect.measurement.stages import GRID
 
 _GROW = np.ones((3, 3), np.uint8)
-
-
-def fuse(
-    outputs: dict[str, DetectorOutput], geometry: GridGeometry, min_cells: int
-) -> tuple[np.ndarray, list[Region]]:
-    """Union of the detectors' flagged cells, regrouped, with attribution."""
-    names = list(outputs)
-    if len(names) == 1:
-        only = outputs[names[0]]
-        return only.flagged, only.regions
-    flagged = np.zeros_like(outputs[names[0]].flagged)
-    strength = np.zeros(flagged.shape, np.float32)
-    for out in outputs.values():
-        flagged |= out.flagged
-        strength = np.maximum(strength, out.strength)
-    regions = find_regions(flagged, strength, geometry, min_cells=min_cells, detector="")
-    fused = []
-    for region in regions:
-        rows, cols = region.cells[:, 0], region.cells[:, 1]
-        found = tuple(n for n in names if outputs[n].flagged[rows, cols].any())
-        fused.append(Region(region.bbox, region.cells, region.area_px, region.score, found))
-    return flagged, fused
-
-
-def object_region(
-    obj: MovingObject,
-    outputs: dict[str, DetectorOutput],
-    geometry: GridGeometry,
-    found_before: tuple[str, ...] = (),
-) -> Region:
-    """A tracked object as a reported region, in input pixels; a held one
-    names ``found_before``, the detectors that found its track last."""
-    sx = geometry.input_size[0] / geometry.work_size[0]
-    sy = geometry.input_size[1] / geometry.work_size[1]
-    x0, y0, x1, y1 = obj.box
-    bbox = [round(x0 * sx), round(y0 * sy), round((x1 - x0) * sx), round((y1 - y0) * sy)]
-    cells = np.argwhere(cells_from_mask(obj.mask, share=1e-6))
-    inside = (slice(y0, y1), slice(x0, x1))  # the mask is empty outside its box
-    own = obj.mask[inside]
-    found = tuple(n for n, out in outputs.items() if (out.mask[inside] & own).any())
-    strength = max(float(out.pixel_strength[inside][own].mean()) for out in outputs.values())
-    area = round(float(own.sum()) * sx * sy)
-    if obj.held:
-        found = found_before or found
-    return Region(bbox, cells, area, strength, found, obj.track, obj.held)
 
 
 class MotionDetector:
@@ -212,7 +169,7 @@ class MotionDetector:
         if cv2.getNumThreads() <= 1:
             measured = (streaming.measured(group, self.measure_frame) for group in groups)
         else:
-            measured = streaming.measured_ahead(groups, self.measure_frame)
+            measured = streaming.measured_ahead(groups, self.measure_frame, self.prepare)
         last = None
         # Closed on any exit, so that the reading thread has stopped before an
         # error here leaves the caller to close the source it reads.
@@ -231,8 +188,19 @@ class MotionDetector:
         can run on another thread while :meth:`judge` handles this one
         (:meth:`stream`). None for the first frame.
         """
-        flow = self.pipeline.process(frame)
-        return flow.prepared() if isinstance(flow, VelocityField) else flow
+        return self.pipeline.process(frame)
+
+    def prepare(self, flow: object | None, stop=None) -> object | None:
+        """What :meth:`judge` reads of a measurement that depends on it alone,
+        computed now: the field's shared maps, then the observer-motion fit's
+        first part (:func:`~motiondetect.constraint_ray.ahead.fitted_ahead`),
+        unless ``stop()`` says to stop between the two. :meth:`stream` has
+        the measuring thread do it while the judging one is busy, and stop
+        once that waits; :meth:`judge` does what is left."""
+        if not isinstance(flow, VelocityField):
+            return flow
+        flow = flow.prepared()
+        return flow if stop is not None and stop() else fitted_ahead(flow, self.fit_config)
 
     def judge(self, flow: object | None, index: int, time_s: float) -> FrameResult:
         """The second half of :meth:`process`: detectors, fusion and objects

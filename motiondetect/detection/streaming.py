@@ -4,6 +4,7 @@ or one ahead on a second thread (:meth:`.detector.MotionDetector.stream`)."""
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
@@ -70,17 +71,38 @@ def measured_picture(frame) -> object:
     return frame.image if grey is None else grey
 
 
-def measured_ahead(groups: Iterable[tuple], measure) -> Iterator[tuple]:
+def measured_ahead(groups: Iterable[tuple], measure, prepare=None) -> Iterator[tuple]:
     """:func:`measured` per group, each group read and measured on a second
-    thread while the one before is used."""
+    thread while the one before is used.
+
+    ``prepare(measurement, stop)``, returning the measurement with more
+    computed (work its user would otherwise do), runs on that thread too,
+    but only while the user is still busy with the group before: when the
+    user already waits, the measurement goes to it at once and the second
+    thread goes on to the next group; ``stop()`` tells ``prepare`` that the
+    user has begun to wait, so that it can stop between steps. So the work
+    falls to whichever thread has time for it, the measuring one or the one
+    using it.
+    """
     items = iter(groups)
+    waiting = threading.Event()  # the user waits for the next group
 
     def read_and_measure():
         got = next(items, None)
-        return None if got is None else measured(got, measure)
+        if got is None:
+            return None
+        held, frame, flow = measured(got, measure)
+        if prepare is not None and not waiting.is_set():
+            flow = prepare(flow, waiting.is_set)
+        return held, frame, flow
 
     with ThreadPoolExecutor(1, thread_name_prefix="measure") as ahead:
         pending = ahead.submit(read_and_measure)
-        while (got := pending.result()) is not None:
+        while True:
+            waiting.set()
+            got = pending.result()
+            waiting.clear()
+            if got is None:
+                break
             pending = ahead.submit(read_and_measure)
             yield got

@@ -74,6 +74,11 @@ class VelocityField:
         velocities from the last field it started from on a steady fast pan
         (``DenseFlowConfig.start_speed_px``); None: it started from rest, and
         the velocities' speed is that distance (``FitConfig.max_speed_px``).
+    ahead : object, optional
+        What the observer-motion fit reads of this field alone, computed
+        with the measurement so that the judging thread need not
+        (:func:`motiondetect.constraint_ray.ahead.fitted_ahead`); None: it is
+        computed when the frame is judged.
     """
 
     velocity_px: np.ndarray
@@ -88,6 +93,7 @@ class VelocityField:
     picture: Picture | None = None
     interval_s: float | None = None
     searched_px: float | None = None
+    ahead: Any = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -100,7 +106,14 @@ class VelocityField:
         keeping every map already computed from the velocity and the frame
         (the cached properties, ``source_px`` and ``structure``): they
         depend on neither."""
-        out = dataclasses.replace(self, camera=camera, tracked=tracked, interval_s=interval_s)
+        return self.replaced(camera=camera, tracked=tracked, interval_s=interval_s)
+
+    def replaced(self, **changes: Any) -> VelocityField:
+        """:func:`dataclasses.replace`, keeping the maps already computed (the
+        cached properties): only for ``changes`` they do not depend on, which
+        are those outside the measurement (``camera``, ``tracked``,
+        ``interval_s``, ``ahead``)."""
+        out = dataclasses.replace(self, **changes)
         for name, value in self.__dict__.items():
             out.__dict__.setdefault(name, value)  # fields are set; only caches are missing
         return out
