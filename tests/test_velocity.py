@@ -156,6 +156,7 @@ def test_a_prepared_field_comes_with_its_maps_and_the_fits_first_part():
     other = FitConfig(tight_px=0.0, sample_step_px=16)
     assert ahead_of(field, detector.fit_config) is field.ahead
     assert len(ahead_of(field, other).points) < len(field.ahead.points)
+    assert ahead_of(fresh, other, maps=False).maps is None  # left to the plane the fit keeps
     for config in (detector.fit_config, other):
         fit, again = fit_camera(field, config), fit_camera(fresh, config)
         np.testing.assert_array_equal(fit.homography, again.homography)

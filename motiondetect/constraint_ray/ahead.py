@@ -5,9 +5,10 @@ the field first (the plane they all vote for), and only then leaves out
 the samples of known movers, which the tracks of earlier frames give.
 Most frames keep the voted plane. The voted plane, and what it leaves of
 the frame (:class:`PlaneMaps`), depend on nothing judged before, so
-:func:`fitted_ahead` computes them with the measurement: on the measuring
-thread when the next frame is measured while this one is judged
-(:meth:`~motiondetect.detection.detector.MotionDetector.stream`). The fit
+:func:`fitted_ahead` can compute them before the frame is judged: on the
+measuring thread, when it has finished the next frame's measurement while
+this one is still being judged
+(:meth:`~motiondetect.detection.detector.MotionDetector.prepare`). The fit
 is the same either way; only where its time is spent changes.
 """
 
@@ -95,8 +96,9 @@ class Ahead:
     voted : (homography or None, (N,) ndarray of bool)
         The plane all the samples vote for (:func:`~.plane.fit_homography`)
         and its inliers.
-    maps : PlaneMaps
-        What the voted plane leaves.
+    maps : PlaneMaps or None
+        What the voted plane leaves; None: not computed (the fit computes
+        it for the plane it keeps).
     sharpness : float
         :func:`~motiondetect.measurement.image_change.sharpness` of the
         frame, 0 while the blur test is off.
@@ -107,13 +109,14 @@ class Ahead:
     velocity: np.ndarray
     speed: float
     voted: tuple[np.ndarray | None, np.ndarray]
-    maps: PlaneMaps
+    maps: PlaneMaps | None
     sharpness: float
 
 
-def ahead_of(field: VelocityField, config: FitConfig) -> Ahead:
-    """``field``'s :class:`Ahead` for ``config``: the one computed with the
-    measurement (:func:`fitted_ahead`), else computed now."""
+def ahead_of(field: VelocityField, config: FitConfig, maps: bool = True) -> Ahead:
+    """``field``'s :class:`Ahead` for ``config``: the one computed before
+    (:func:`fitted_ahead`), else computed now, with the voted plane's
+    :class:`PlaneMaps` only when ``maps``."""
     known = field.ahead
     if isinstance(known, Ahead) and known.config == config:
         return known
@@ -123,9 +126,9 @@ def ahead_of(field: VelocityField, config: FitConfig) -> Ahead:
         points, velocity, config.ransac_px, outlier_px=config.max_speed_px,
         tight_px=config.tight_px, seed=config.seed,
     )  # fmt: skip
-    maps = plane_maps(field, voted[0], voted[1], config)
+    left = plane_maps(field, voted[0], voted[1], config) if maps else None
     sharp = sharpness(field.grey) if config.blur_ratio > 0 else 0.0
-    return Ahead(config, points, velocity, speed, voted, maps, sharp)
+    return Ahead(config, points, velocity, speed, voted, left, sharp)
 
 
 def fitted_ahead(field: VelocityField, config: FitConfig) -> VelocityField:

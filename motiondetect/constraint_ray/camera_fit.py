@@ -279,11 +279,12 @@ def fit_camera(
     CameraFit
         With ``reason`` set (and no residual) when the frame cannot be judged.
     """
-    ahead = ahead_of(field, config)
+    ahead = ahead_of(field, config, maps=False)  # prepared with its maps, or without
     points, velocity, speed = ahead.points, ahead.velocity, ahead.speed
     homography, inliers, voted, voters = _plane(ahead, movers, occluder, config)
-    kept = homography is ahead.voted[0]  # most frames: what the voted plane leaves is known
-    maps = ahead.maps if kept else plane_maps(field, homography, inliers, config)
+    maps = ahead.maps if homography is ahead.voted[0] else None  # most frames keep it
+    if maps is None:
+        maps = plane_maps(field, homography, inliers, config)
     difference, residual, sampled, share = maps.difference, maps.residual, maps.sampled, maps.share
     sharp = ahead.sharpness
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness

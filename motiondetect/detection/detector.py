@@ -17,7 +17,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import dataclasses
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 import cv2
 import numpy as np
@@ -190,7 +190,7 @@ class MotionDetector:
         """
         return self.pipeline.process(frame)
 
-    def prepare(self, flow: object | None, stop=None) -> object | None:
+    def prepare(self, flow: object | None, stop: Callable[[], bool] | None = None) -> object | None:
         """What :meth:`judge` reads of a measurement that depends on it alone,
         computed now: the field's shared maps, then the observer-motion fit's
         first part (:func:`~motiondetect.constraint_ray.ahead.fitted_ahead`),

@@ -76,7 +76,7 @@ class VelocityField:
         the velocities' speed is that distance (``FitConfig.max_speed_px``).
     ahead : object, optional
         What the observer-motion fit reads of this field alone, computed
-        with the measurement so that the judging thread need not
+        before the frame is judged, on the measuring thread when it has time
         (:func:`motiondetect.constraint_ray.ahead.fitted_ahead`); None: it is
         computed when the frame is judged.
     """
