@@ -86,8 +86,12 @@ def _counted(monkeypatch) -> dict:
     return calls
 
 
-def test_detect_converts_no_whole_frame_to_colour(tmp_path, frames, monkeypatch):
-    path = encode(tmp_path / "clip.mp4", frames)
+@pytest.mark.parametrize("kind", ["video", "jpeg folder"])
+def test_detect_converts_no_whole_frame_to_colour(tmp_path, frames, monkeypatch, kind):
+    if kind == "video":
+        path = encode(tmp_path / "clip.mp4", frames)
+    else:
+        path = _jpeg_folder(tmp_path / "seq", frames)
     calls = _counted(monkeypatch)
     result = CliRunner().invoke(main, ["detect", str(path), "-o", str(tmp_path / "a"), "-q"])
     assert result.exit_code == 0, result.output
@@ -97,3 +101,47 @@ def test_detect_converts_no_whole_frame_to_colour(tmp_path, frames, monkeypatch)
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 0, result.output
     assert calls == {"whole": 0, "resized": 0}  # the luma alone was read
+
+
+def _jpeg_folder(folder, frames, sampling=None):
+    folder.mkdir()
+    params = [] if sampling is None else [cv2.IMWRITE_JPEG_SAMPLING_FACTOR, sampling]
+    for n, image in enumerate(frames):
+        cv2.imwrite(str(folder / f"f_{n + 7}.jpg"), image, params)
+    return folder
+
+
+@pytest.mark.parametrize(
+    "sampling", [None, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_422]
+)
+def test_a_colour_jpeg_folder_is_measured_on_its_luma_as_a_video_is(tmp_path, frames, sampling):
+    folder = _jpeg_folder(tmp_path / "seq", frames[:3], sampling)
+    with open_source(folder) as source:
+        read = list(source)
+    assert [f.number for f in read] == [7, 8, 9]
+    for f, file in zip(read, sorted(folder.iterdir())):
+        assert isinstance(f, decode.DecodedFrame)  # the luma read alone, colour only if drawn
+        luma = cv2.imread(str(file), cv2.IMREAD_GRAYSCALE).astype(int)  # libjpeg's Y plane
+        diff = np.abs(f.grey.astype(int) - luma)
+        assert diff.max() <= 1 and diff.mean() < 0.05  # two IDCTs' rounding
+        colour = cv2.imread(str(file))
+        assert f.image.shape == colour.shape
+        assert np.abs(f.image.astype(int) - colour).mean() < 1.5  # chroma upsampled otherwise
+        h, w = colour.shape[:2]
+        assert f.picture((w // 2, h // 2)).shape == (h // 2, w // 2, 3)
+
+
+def test_images_ffmpeg_does_not_read_as_colour_jpegs_are_read_by_opencv(tmp_path, frames):
+    folder = _jpeg_folder(tmp_path / "seq", frames[:2])
+    grey = cv2.cvtColor(frames[2], cv2.COLOR_BGR2GRAY)
+    cv2.imwrite(str(folder / "f_9.jpg"), grey)  # a grey JPEG
+    cv2.imwrite(str(folder / "f_10.png"), frames[3])
+    (folder / "f_11.jpg").write_bytes(cv2.imencode(".png", frames[4])[1].tobytes())  # misnamed
+    cv2.imwrite(str(folder / "f_12.jpg"), frames[5])  # FFmpeg's again after its error
+    with open_source(folder) as source:
+        read = list(source)
+    assert [type(f) is decode.DecodedFrame for f in read] == [True, True, False, False, False, True]
+    assert read[2].image.shape == grey.shape
+    assert np.abs(read[2].image.astype(int) - grey).mean() < 2
+    assert np.array_equal(read[3].image, frames[3]) and np.array_equal(read[4].image, frames[4])
+    assert not source.partial

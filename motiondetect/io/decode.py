@@ -270,7 +270,8 @@ class AvSource(FrameSource):
 
 
 class DecodedFrame(SourceFrame):
-    """A frame of :class:`AvSource`: its BGR ``image`` and its ``grey`` are
+    """A frame of :class:`AvSource` (or a colour JPEG of a frames folder,
+    with its ``number``): its BGR ``image`` and its ``grey`` are
     made from FFmpeg's frame when first read, each once, and turned as the
     container asks. The measurement reads only ``grey``, the luma plane
     (:func:`~.colour.frame_to_grey`), and the annotated video its
@@ -278,8 +279,10 @@ class DecodedFrame(SourceFrame):
     no frame is converted to colour whole.
     """
 
-    def __init__(self, index: int, time_s: float, frame: av.VideoFrame, turns: int) -> None:
-        for name, value in (("index", index), ("time_s", time_s), ("number", None)):
+    def __init__(
+        self, index: int, time_s: float, frame: av.VideoFrame, turns: int, number: int | None = None
+    ) -> None:
+        for name, value in (("index", index), ("time_s", time_s), ("number", number)):
             object.__setattr__(self, name, value)
         object.__setattr__(self, "_decoded", (frame, turns))
 

@@ -3,9 +3,14 @@
 
 Frames are sorted by the last number in their names (``frame_2`` before
 ``frame_10``); other files are skipped with a warning; 16-bit and grey
-images are kept as they are. Times step by the given (or assumed) fps; where
-the numbering has gaps (frames left out of a sequence), a frame numbered
-``n`` is at ``(n - first) / fps``, so the gaps are gaps in time too.
+images are kept as they are. A colour JPEG is decoded by FFmpeg's JPEG
+decoder, as a video's frames are (:class:`~.decode.DecodedFrame`): the
+measurement reads its luma plane as the file stores it, and only what is
+drawn is converted to colour. Any other image, or a JPEG FFmpeg cannot
+decode (arithmetic coding, a PNG misnamed), is read whole by OpenCV. Times
+step by the given (or assumed) fps; where the numbering has gaps (frames
+left out of a sequence), a frame numbered ``n`` is at ``(n - first) /
+fps``, so the gaps are gaps in time too.
 """
 
 from __future__ import annotations
@@ -14,9 +19,11 @@ import logging
 from collections.abc import Iterator
 from pathlib import Path
 
+import av
 import cv2
 import numpy as np
 
+from motiondetect.io.decode import DecodedFrame
 from motiondetect.io.files import last_number
 from motiondetect.io.source import (
     DEFAULT_FRAMES_FPS,
@@ -30,6 +37,11 @@ from motiondetect.io.source import (
 )
 
 log = logging.getLogger("motiondetect")
+
+#: What FFmpeg decodes a colour JPEG to (4:2:0, 4:2:2 and 4:4:4 at full
+#: range), read as a video's frames are; other layouts (grey, 4:4:0, CMYK)
+#: are left to OpenCV.
+JPEG_LAYOUTS = ("yuvj420p", "yuvj422p", "yuvj444p")
 
 
 def numeric_key(path: Path) -> tuple:
@@ -72,10 +84,12 @@ class FramesFolderSource(FrameSource):
         if gaps:
             timed = "timed by their numbers" if rising else "taken in order"
             log.warning("%s: frame numbering has %d gaps; frames are %s", path, gaps, timed)
+        self._jpeg = av.CodecContext.create("mjpeg", "r")
+        self._jpeg.thread_count = 1  # one picture a packet, returned at once
         first = self._read(files[0]) if files else None
         if first is None:
             raise VideoError(f"{path}: no readable image frames")
-        h, w = first.shape[:2]
+        w, h = _size(first)
         check_size(w, h, str(path))
         self._files, self._numbers, self._first = files, numbers, first
         self.info = VideoInfo(
@@ -83,26 +97,45 @@ class FramesFolderSource(FrameSource):
         )
         self.partial = False
 
-    @staticmethod
-    def _read(file: Path) -> np.ndarray | None:
+    def _read(self, file: Path) -> np.ndarray | av.VideoFrame | None:
+        """The image in ``file``: a colour JPEG as FFmpeg's decoded frame,
+        anything else as OpenCV's array; None when unreadable."""
         data = np.fromfile(str(file), np.uint8)  # unicode-safe, unlike cv2.imread
         if data.size == 0:
             return None
+        if file.suffix.lower() in (".jpg", ".jpeg"):
+            try:
+                decoded = self._jpeg.decode(av.Packet(data.tobytes()))
+            except av.error.FFmpegError:  # e.g. arithmetic coding: left to OpenCV
+                decoded = []
+            if decoded and decoded[0].format.name in JPEG_LAYOUTS:
+                return decoded[0]
         return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
 
     def __iter__(self) -> Iterator[SourceFrame]:
-        shape = self._first.shape
+        size = _size(self._first)
         index = 0
         for i, file in enumerate(self._files):
             image = self._first if i == 0 else self._read(file)
-            if image is None or image.shape[:2] != shape[:2]:
+            if image is None or _size(image) != size:
                 log.warning("%s: skipping unreadable or differently sized frame", file)
                 self.partial = True
                 continue
             step = self._numbers[i] - self._numbers[0] if self._timed_by_number else index
-            yield SourceFrame(index, step / self.info.fps, image, self._numbers[i])
+            time_s, number = step / self.info.fps, self._numbers[i]
+            if isinstance(image, av.VideoFrame):
+                yield DecodedFrame(index, time_s, image, 0, number)
+            else:
+                yield SourceFrame(index, time_s, image, number)
             index += 1
 
     @property
     def frame_numbers(self) -> list[int]:
         return list(self._numbers)
+
+
+def _size(image: np.ndarray | av.VideoFrame) -> tuple[int, int]:
+    """(width, height) of a read image."""
+    if isinstance(image, av.VideoFrame):
+        return image.width, image.height
+    return image.shape[1], image.shape[0]
