@@ -100,17 +100,17 @@ class FramesFolderSource(FrameSource):
     def _read(self, file: Path) -> np.ndarray | av.VideoFrame | None:
         """The image in ``file``: a colour JPEG as FFmpeg's decoded frame,
         anything else as OpenCV's array; None when unreadable."""
-        data = np.fromfile(str(file), np.uint8)  # unicode-safe, unlike cv2.imread
-        if data.size == 0:
+        data = file.read_bytes()  # decoded from memory: any name, unlike cv2.imread
+        if not data:
             return None
         if file.suffix.lower() in (".jpg", ".jpeg"):
             try:
-                decoded = self._jpeg.decode(av.Packet(data.tobytes()))
+                decoded = self._jpeg.decode(av.Packet(data))
             except av.error.FFmpegError:  # e.g. arithmetic coding: left to OpenCV
                 decoded = []
             if decoded and decoded[0].format.name in JPEG_LAYOUTS:
                 return decoded[0]
-        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+        return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
 
     def __iter__(self) -> Iterator[SourceFrame]:
         size = _size(self._first)
