@@ -149,6 +149,42 @@ def test_gap_and_stray_file_in_frames_folder(tmp_path, frames):
     check_outputs(tmp_path / "o" / "seq", 6)
 
 
+@pytest.mark.parametrize("suffix", [".jpg", ".png"])  # FFmpeg's JPEG decoder, OpenCV's
+def test_unreadable_frame_files_leave_gaps_and_the_rest_keep_their_places(tmp_path, frames, suffix):
+    """A frames folder whose first file (or any other) is unreadable is
+    processed as partial, not refused; every frame read keeps the index and
+    time of its place among the files, so the masks stay numbered as the
+    files (and as ground truth numbered like them)."""
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i, f in enumerate(frames[:8]):
+        cv2.imwrite(str(seq / f"{i:05d}{suffix}"), f)
+    (seq / f"00000{suffix}").write_bytes(b"")  # the first file: empty
+    (seq / f"00004{suffix}").write_bytes(b"not an image\n" * 20)
+    with open_source(seq) as source:
+        read = list(source)
+        assert source.partial
+    assert [f.index for f in read] == [f.number for f in read] == [1, 2, 3, 5, 6, 7]
+    assert [round(f.time_s * 30, 6) for f in read] == [1, 2, 3, 5, 6, 7]
+    result = run("detect", seq, "-o", tmp_path / "o", "-q", "--masks")
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "o" / "seq"
+    assert json.loads((out / "summary.json").read_text())["status"] == "partial"
+    records = [json.loads(line) for line in (out / "frames.jsonl").read_text().splitlines()]
+    assert [r["frame"] for r in records] == [1, 2, 3, 5, 6, 7]
+    assert [round(r["time_s"] * 30, 2) for r in records] == [1, 2, 3, 5, 6, 7]
+    masks = sorted(p.name for p in (out / "masks").iterdir())
+    assert masks == [f"{n:06d}.png" for n in (1, 2, 3, 5, 6, 7)]
+
+
+def test_a_frames_folder_with_no_readable_file_is_one_line(tmp_path):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i in range(3):
+        (seq / f"{i:03d}.png").write_bytes(b"not a png")
+    one_failure(run("detect", seq, "-o", tmp_path / "o", "-q"), "no readable image frames")
+
+
 def test_unicode_and_spaces_in_paths(tmp_path, frames):
     folder = tmp_path / "vidéos d'été"
     folder.mkdir()

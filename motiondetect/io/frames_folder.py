@@ -10,7 +10,10 @@ drawn is converted to colour. Any other image, or a JPEG FFmpeg cannot
 decode (arithmetic coding, a PNG misnamed), is read whole by OpenCV. Times
 step by the given (or assumed) fps; where the numbering has gaps (frames
 left out of a sequence), a frame numbered ``n`` is at ``(n - first) /
-fps``, so the gaps are gaps in time too.
+fps``, so the gaps are gaps in time too. A file that cannot be read (or
+differs in size from the first readable one) is skipped with a warning and
+marks the input partial; the frames keep the index and time of their
+places among the files, so it leaves a gap as well.
 """
 
 from __future__ import annotations
@@ -86,16 +89,24 @@ class FramesFolderSource(FrameSource):
             log.warning("%s: frame numbering has %d gaps; frames are %s", path, gaps, timed)
         self._jpeg = av.CodecContext.create("mjpeg", "r")
         self._jpeg.thread_count = 1  # one picture a packet, returned at once
-        first = self._read(files[0]) if files else None
+        first, first_at = self._first_readable(files)  # it sets the size
         if first is None:
             raise VideoError(f"{path}: no readable image frames")
         w, h = _size(first)
         check_size(w, h, str(path))
-        self._files, self._numbers, self._first = files, numbers, first
+        self._files, self._numbers, self._first, self._first_at = files, numbers, first, first_at
         self.info = VideoInfo(
             str(path), "frames", w, h, fps, len(files), "image-sequence", 0, fps_source
         )
         self.partial = False
+
+    def _first_readable(self, files: list[Path]) -> tuple[np.ndarray | av.VideoFrame | None, int]:
+        """The first of ``files`` that can be read, and its place (None, len: none can)."""
+        for at, file in enumerate(files):
+            image = self._read(file)
+            if image is not None:
+                return image, at
+        return None, len(files)
 
     def _read(self, file: Path) -> np.ndarray | av.VideoFrame | None:
         """The image in ``file``: a colour JPEG as FFmpeg's decoded frame,
@@ -113,21 +124,28 @@ class FramesFolderSource(FrameSource):
         return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
 
     def __iter__(self) -> Iterator[SourceFrame]:
+        """Each readable frame, its index its place among the files and its
+        time its place in the sequence: a file skipped (unreadable, or of
+        another size) leaves a gap in both, as a frame left out of the
+        numbering leaves one in time, so the frames after it keep their
+        own times (and ground truth, or poses, numbered as the files)."""
         size = _size(self._first)
-        index = 0
         for i, file in enumerate(self._files):
-            image = self._first if i == 0 else self._read(file)
+            image = None if i < self._first_at else self._read_again(i, file)
             if image is None or _size(image) != size:
                 log.warning("%s: skipping unreadable or differently sized frame", file)
                 self.partial = True
                 continue
-            step = self._numbers[i] - self._numbers[0] if self._timed_by_number else index
+            step = self._numbers[i] - self._numbers[0] if self._timed_by_number else i
             time_s, number = step / self.info.fps, self._numbers[i]
             if isinstance(image, av.VideoFrame):
-                yield DecodedFrame(index, time_s, image, 0, number)
+                yield DecodedFrame(i, time_s, image, 0, number)
             else:
-                yield SourceFrame(index, time_s, image, number)
-            index += 1
+                yield SourceFrame(i, time_s, image, number)
+
+    def _read_again(self, i: int, file: Path) -> np.ndarray | av.VideoFrame | None:
+        """The ``i``-th file's image: the first readable one as read to open the folder."""
+        return self._first if i == self._first_at else self._read(file)
 
     @property
     def frame_numbers(self) -> list[int]:
