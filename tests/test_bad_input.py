@@ -177,6 +177,65 @@ def test_unreadable_frame_files_leave_gaps_and_the_rest_keep_their_places(tmp_pa
     assert masks == [f"{n:06d}.png" for n in (1, 2, 3, 5, 6, 7)]
 
 
+def _read_with_warnings(folder):
+    """(the frames read from ``folder``, whether it was partial, the warnings logged)."""
+    records = []
+    handler = logging.Handler()
+    handler.emit = records.append
+    logger = logging.getLogger("motiondetect")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.WARNING)
+    try:
+        with open_source(folder) as source:
+            read = list(source)
+            partial = source.partial
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+    return read, partial, [r.getMessage() for r in records if r.levelno == logging.WARNING]
+
+
+def test_a_preview_or_a_first_frame_of_another_size_does_not_set_the_frames_size(tmp_path, frames):
+    """An unnumbered image among numbered frames (a preview, a cover) is no
+    frame: skipped with a warning, the sequence as it was. A numbered frame of
+    another size is skipped even when it comes first: the frames' size is the
+    one most of the first readable files share. Before, either set the size
+    and every real frame was skipped as differently sized."""
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i, f in enumerate(frames[:6]):
+        cv2.imwrite(str(seq / f"{i:03d}.png"), f)
+    cv2.imwrite(str(seq / "preview.png"), cv2.resize(frames[0], None, fx=0.5, fy=0.5))
+    cv2.imwrite(str(seq / "cover.jpg"), frames[0])
+    read, partial, warnings = _read_with_warnings(seq)
+    assert [f.index for f in read] == [f.number for f in read] == list(range(6))
+    assert not partial
+    assert any("without a frame number" in m and "cover.jpg" in m for m in warnings), warnings
+    assert not any("differently sized" in m for m in warnings), warnings
+    (seq / "preview.png").unlink()
+    (seq / "cover.jpg").unlink()
+    cv2.imwrite(str(seq / "000.png"), cv2.resize(frames[0], None, fx=2, fy=2))
+    read, partial, warnings = _read_with_warnings(seq)
+    assert [f.index for f in read] == [1, 2, 3, 4, 5]
+    assert {f.image.shape for f in read} == {frames[0].shape} and partial
+    assert any("000.png" in m and "differently sized" in m for m in warnings), warnings
+    result = run("detect", seq, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "o" / "seq" / "summary.json").read_text())
+    assert (summary["input"]["width"], summary["input"]["height"]) == frames[0].shape[1::-1]
+
+
+def test_a_frames_folder_without_numbers_is_taken_by_name(tmp_path, frames):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for name, f in zip(("a", "b", "c"), frames[:3], strict=True):
+        cv2.imwrite(str(seq / f"{name}.png"), f)
+    read, partial, warnings = _read_with_warnings(seq)
+    assert len(read) == 3 and not partial and warnings == []
+    assert [int(f.image.mean()) for f in read] == [int(f.mean()) for f in frames[:3]]
+
+
 def test_a_frames_folder_with_no_readable_file_is_one_line(tmp_path):
     seq = tmp_path / "seq"
     seq.mkdir()

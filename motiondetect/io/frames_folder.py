@@ -2,7 +2,8 @@
 (JPEG, PNG, BMP, TIFF) and no video.
 
 Frames are sorted by the last number in their names (``frame_2`` before
-``frame_10``); other files are skipped with a warning; 16-bit and grey
+``frame_10``); other files are skipped with a warning, and so are images
+without a number among numbered ones (a preview, a cover); 16-bit and grey
 images are kept as they are. A colour JPEG is decoded by FFmpeg's JPEG
 decoder, as a video's frames are (:class:`~.decode.DecodedFrame`): the
 measurement reads its luma plane as the file stores it, and only what is
@@ -11,7 +12,8 @@ decode (arithmetic coding, a PNG misnamed), is read whole by OpenCV. Times
 step by the given (or assumed) fps; where the numbering has gaps (frames
 left out of a sequence), a frame numbered ``n`` is at ``(n - first) /
 fps``, so the gaps are gaps in time too. A file that cannot be read (or
-differs in size from the first readable one) is skipped with a warning and
+differs in size from the frames, the size most of the first three readable
+files share) is skipped with a warning and
 marks the input partial; the frames keep the index and time of their
 places among the files, so it leaves a gap as well.
 """
@@ -66,19 +68,39 @@ def is_frames_folder(path: Path) -> bool:
     return images >= 2 and videos == 0
 
 
+def frame_files(path: Path) -> list[Path]:
+    """The frames folder's frame files, in order; other entries skipped with a
+    warning: files that are not images, and images without a number in
+    their names among numbered ones (a preview, a cover, a thumbnail), which
+    are no place in the sequence."""
+    files, stray = [], []
+    for entry in path.iterdir():
+        if entry.is_file() and entry.suffix.lower() in IMAGE_EXTENSIONS:
+            files.append(entry)
+        elif not entry.name.startswith("."):
+            stray.append(entry.name)
+    if stray:
+        log.warning("%s: skipping %d non-image entries (e.g. %s)", path, len(stray), stray[0])
+    numbered = [f for f in files if last_number(f) is not None]
+    if numbered and len(numbered) < len(files):
+        odd = sorted(f.name for f in files if last_number(f) is None)
+        log.warning(
+            "%s: skipping images without a frame number among numbered frames: %d (e.g. %s)",
+            path, len(odd), odd[0],
+        )  # fmt: skip
+        files = numbered
+    return sorted(files, key=numeric_key)
+
+
+#: Readable files, from the first, whose most common size is the frames'.
+SIZE_VOTES = 3
+
+
 class FramesFolderSource(FrameSource):
     def __init__(self, path: Path, fps: float | None) -> None:
         fps_source = "assumed" if fps is None else "given"
         fps = DEFAULT_FRAMES_FPS if fps is None else fps
-        files, stray = [], []
-        for entry in path.iterdir():
-            if entry.is_file() and entry.suffix.lower() in IMAGE_EXTENSIONS:
-                files.append(entry)
-            elif not entry.name.startswith("."):
-                stray.append(entry.name)
-        if stray:
-            log.warning("%s: skipping %d non-image entries (e.g. %s)", path, len(stray), stray[0])
-        files.sort(key=numeric_key)
+        files = frame_files(path)
         numbers = [numeric_key(f)[0] for f in files]
         steps = [b - a for a, b in zip(numbers, numbers[1:])]
         gaps = sum(step > 1 for step in steps)
@@ -101,12 +123,23 @@ class FramesFolderSource(FrameSource):
         self.partial = False
 
     def _first_readable(self, files: list[Path]) -> tuple[np.ndarray | av.VideoFrame | None, int]:
-        """The first of ``files`` that can be read, and its place (None, len: none can)."""
+        """The first of ``files`` that can be read and has the size most of
+        the first :data:`SIZE_VOTES` readable ones share (a preview or a
+        thumbnail among the frames does not set it), and its place; (None,
+        len) when none can be read."""
+        seen = []
         for at, file in enumerate(files):
             image = self._read(file)
             if image is not None:
-                return image, at
-        return None, len(files)
+                seen.append((at, image))
+                if len(seen) == SIZE_VOTES:
+                    break
+        if not seen:
+            return None, len(files)
+        sizes = [_size(image) for _, image in seen]
+        common = max(sizes, key=sizes.count)  # a tie: the first file's
+        at, image = seen[sizes.index(common)]
+        return image, at
 
     def _read(self, file: Path) -> np.ndarray | av.VideoFrame | None:
         """The image in ``file``: a colour JPEG as FFmpeg's decoded frame,
