@@ -226,6 +226,17 @@ def test_a_preview_or_a_first_frame_of_another_size_does_not_set_the_frames_size
     assert (summary["input"]["width"], summary["input"]["height"]) == frames[0].shape[1::-1]
 
 
+def test_repeated_frame_numbers_are_named_in_a_warning(tmp_path, frames):
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i, f in enumerate(frames[:3]):  # two cameras' frames, say, in one folder
+        cv2.imwrite(str(seq / f"cam1_{i:03d}.png"), f)
+        cv2.imwrite(str(seq / f"cam2_{i:03d}.png"), f)
+    read, _, warnings = _read_with_warnings(seq)
+    assert [f.number for f in read] == [0, 0, 1, 1, 2, 2]
+    assert any("3 frame numbers repeat" in m and "cam2_000.png" in m for m in warnings), warnings
+
+
 def test_a_frames_folder_without_numbers_is_taken_by_name(tmp_path, frames):
     seq = tmp_path / "seq"
     seq.mkdir()

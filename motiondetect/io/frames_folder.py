@@ -109,6 +109,14 @@ class FramesFolderSource(FrameSource):
         if gaps:
             timed = "timed by their numbers" if rising else "taken in order"
             log.warning("%s: frame numbering has %d gaps; frames are %s", path, gaps, timed)
+        repeated = [
+            f.name for f, n, step in zip(files[1:], numbers[1:], steps) if n >= 0 and step == 0
+        ]
+        if repeated:  # two cameras' frames in one folder, say: interleaved by number
+            log.warning(
+                "%s: %d frame numbers repeat (e.g. %s); frames are taken by number, then name",
+                path, len(repeated), repeated[0],
+            )  # fmt: skip
         self._jpeg = av.CodecContext.create("mjpeg", "r")
         self._jpeg.thread_count = 1  # one picture a packet, returned at once
         first, first_at = self._first_readable(files)  # it sets the size
