@@ -327,3 +327,42 @@ def test_annotated_video_plays_in_headless_chromium(tmp_path, frames):
     assert "duration=" in done.stdout, done.stdout[-500:] + done.stderr[-500:]
     duration = float(done.stdout.split("duration=")[1].split("<")[0])
     assert abs(duration - N / 30) < 0.1
+
+
+def test_a_thumbnail_stream_before_the_video_is_not_read_as_the_video(tmp_path, frames):
+    """A file storing a one-picture stream (a thumbnail, a cover) before its
+    video: the video is read, as FFmpeg's own choice of stream has it."""
+    path = tmp_path / "thumb_first.mkv"
+    with av.open(str(path), "w") as container:
+        thumb = container.add_stream("mjpeg", rate=1)
+        thumb.width, thumb.height, thumb.pix_fmt = 96, 64, "yuvj420p"
+        main = container.add_stream("libx264", rate=30)
+        h, w = frames[0].shape[:2]
+        main.width, main.height, main.pix_fmt = w, h, "yuv420p"
+        small = np.ascontiguousarray(frames[0][:64, :96])
+        for stream, images in ((thumb, [small]), (main, frames)):
+            for image in images:
+                container.mux(stream.encode(av.VideoFrame.from_ndarray(image, format="bgr24")))
+            container.mux(stream.encode())
+    with open_source(path) as source:
+        assert (source.info.width, source.info.height, source.info.codec) == (w, h, "h264")
+        assert sum(1 for _ in source) == N
+    result = run("detect", path, "-o", tmp_path / "o", "-q", "--no-video")
+    assert result.exit_code == 0, result.output
+    assert len(times_of(tmp_path / "o" / "thumb_first")) == N
+
+
+def test_a_cover_picture_is_never_the_video_while_a_video_exists():
+    from types import SimpleNamespace
+
+    from motiondetect.io.decode import main_video_stream
+
+    cover = SimpleNamespace(disposition=av.stream.Disposition.attached_pic)
+    video, other = SimpleNamespace(disposition=0), SimpleNamespace(disposition=0)
+
+    def container(streams, best):
+        return SimpleNamespace(streams=SimpleNamespace(video=streams, best=lambda kind: best))
+
+    assert main_video_stream(container([cover, video], cover)) is video
+    assert main_video_stream(container([cover, video, other], other)) is other
+    assert main_video_stream(container([cover], cover)) is cover  # all there is

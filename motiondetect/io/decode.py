@@ -156,6 +156,26 @@ def _frame_rate(stream) -> tuple[float, str]:
     return DEFAULT_FRAMES_FPS, "assumed"
 
 
+#: Dispositions of a video stream that is a picture, not the video: cover art
+#: (an MP4's or MKV's attached picture), thumbnails, a still image.
+_PICTURES = (
+    av.stream.Disposition.attached_pic
+    | av.stream.Disposition.timed_thumbnails
+    | av.stream.Disposition.still_image
+)
+
+
+def main_video_stream(container: av.container.InputContainer) -> av.VideoStream:
+    """The video stream to read: FFmpeg's best (``av_find_best_stream``: the
+    default one, then the one with frames, then the highest bit rate), never
+    a cover picture or a thumbnail track while another exists; the first
+    video stream was a thumbnail in files that store one before the video."""
+    videos = list(container.streams.video)
+    moving = [s for s in videos if not s.disposition & _PICTURES] or videos
+    best = container.streams.best("video")
+    return best if best in moving else moving[0]
+
+
 class AvSource(FrameSource):
     """The frames of one video file, URL, device or pipe, decoded by FFmpeg."""
 
@@ -172,7 +192,7 @@ class AvSource(FrameSource):
     def _setup(self, name: str) -> None:
         if not self._container.streams.video:
             raise VideoError(f"{name}: no video stream (a damaged header, or audio or data only)")
-        stream = self._stream = self._container.streams.video[0]
+        stream = self._stream = main_video_stream(self._container)
         if stream.codec_context is None:
             raise VideoError(f"{name}: no decoder for this stream's codec in this FFmpeg build")
         stream.thread_type = "AUTO"

@@ -15,7 +15,7 @@ import av
 import cv2
 import numpy as np
 
-from motiondetect.io.decode import AvSource, is_stream_location
+from motiondetect.io.decode import AvSource, is_stream_location, main_video_stream
 from motiondetect.io.encode import VideoSink
 from motiondetect.io.files import atomic_path, display_name
 from motiondetect.io.frames_folder import FramesFolderSource, is_frames_folder, numeric_key
@@ -97,7 +97,7 @@ def write_image(path: Path, image: np.ndarray) -> None:
 def count_decodable_frames(path: str | Path) -> int:
     """Decode a video to the end and count its frames (container counts can lie)."""
     with av.open(str(path)) as container:
-        return sum(1 for _ in container.decode(video=0))
+        return sum(1 for _ in container.decode(main_video_stream(container)))
 
 
 def read_mask(path: Path) -> np.ndarray | None:
