@@ -365,4 +365,23 @@ def test_a_cover_picture_is_never_the_video_while_a_video_exists():
 
     assert main_video_stream(container([cover, video], cover)) is video
     assert main_video_stream(container([cover, video, other], other)) is other
-    assert main_video_stream(container([cover], cover)) is cover  # all there is
+    assert main_video_stream(container([cover], cover)) is None  # an audio file's cover
+
+
+def test_an_audio_file_with_a_cover_picture_is_one_line(tmp_path):
+    path = tmp_path / "song.m4a"
+    with av.open(str(path), "w", format="mp4") as container:
+        audio = container.add_stream("aac", rate=44100)
+        cover = container.add_stream("mjpeg", rate=1)
+        cover.width, cover.height, cover.pix_fmt = 64, 64, "yuvj420p"
+        cover.disposition = av.stream.Disposition.attached_pic
+        picture = av.VideoFrame.from_ndarray(np.zeros((64, 64, 3), np.uint8), format="rgb24")
+        container.mux(cover.encode(picture))
+        container.mux(cover.encode())
+        sound = av.AudioFrame.from_ndarray(np.zeros((1, 4410), np.float32), "fltp", "mono")
+        sound.sample_rate = 44100
+        container.mux(audio.encode(sound))
+        container.mux(audio.encode())
+    result = run("detect", path, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "song.m4a: no video stream, only a cover picture" in result.output

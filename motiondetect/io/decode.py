@@ -165,15 +165,15 @@ _PICTURES = (
 )
 
 
-def main_video_stream(container: av.container.InputContainer) -> av.VideoStream:
+def main_video_stream(container: av.container.InputContainer) -> av.VideoStream | None:
     """The video stream to read: FFmpeg's best (``av_find_best_stream``: the
     default one, then the one with frames, then the highest bit rate), never
-    a cover picture or a thumbnail track while another exists; the first
-    video stream was a thumbnail in files that store one before the video."""
-    videos = list(container.streams.video)
-    moving = [s for s in videos if not s.disposition & _PICTURES] or videos
+    a cover picture or a thumbnail track (the first video stream was a
+    thumbnail in files that store one before the video); None when the
+    file's video streams are only such pictures (an audio file's cover)."""
+    moving = [s for s in container.streams.video if not s.disposition & _PICTURES]
     best = container.streams.best("video")
-    return best if best in moving else moving[0]
+    return best if best in moving else (moving[0] if moving else None)
 
 
 class AvSource(FrameSource):
@@ -193,6 +193,8 @@ class AvSource(FrameSource):
         if not self._container.streams.video:
             raise VideoError(f"{name}: no video stream (a damaged header, or audio or data only)")
         stream = self._stream = main_video_stream(self._container)
+        if stream is None:
+            raise VideoError(f"{name}: no video stream, only a cover picture (an audio file?)")
         if stream.codec_context is None:
             raise VideoError(f"{name}: no decoder for this stream's codec in this FFmpeg build")
         stream.thread_type = "AUTO"

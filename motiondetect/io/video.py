@@ -97,7 +97,8 @@ def write_image(path: Path, image: np.ndarray) -> None:
 def count_decodable_frames(path: str | Path) -> int:
     """Decode a video to the end and count its frames (container counts can lie)."""
     with av.open(str(path)) as container:
-        return sum(1 for _ in container.decode(main_video_stream(container)))
+        stream = main_video_stream(container)
+        return 0 if stream is None else sum(1 for _ in container.decode(stream))
 
 
 def read_mask(path: Path) -> np.ndarray | None:
