@@ -6,6 +6,7 @@ Every test makes its own files; each reproduces one reported defect.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import signal
 import subprocess
@@ -106,6 +107,38 @@ def test_discovery_visits_each_path_once_and_never_reads_its_own_outputs(tmp_pat
     named = [j.name for j in discover_inputs([batch], True, exclude=("Annotations",))]
     assert named == ["again"]
     assert [j.name for j in discover_inputs([batch], True, include=("sub/*.mp4",))] == ["sub/v"]
+
+
+def test_an_input_given_twice_or_also_found_in_a_folder_given_is_taken_once(tmp_path):
+    """Before, a folder given twice added a failing input (the folder, with
+    'a directory with 0 images and no video') and a file given twice was
+    processed twice, into ``v`` and ``v.mp4-2``."""
+    batch = tmp_path / "batch"
+    batch.mkdir()
+    noise_video(batch / "v.mp4")
+    noise_video(batch / "w.mp4")
+    file = batch / "v.mp4"
+    for given in ([batch, batch], [file, file], [batch, file], [file, batch], [file, batch, batch]):
+        jobs = discover_inputs(given, recursive=False)
+        assert sorted(j.path.name for j in jobs) == (["v.mp4"] if given == [file, file] else
+                                                     ["v.mp4", "w.mp4"]), given  # fmt: skip
+    records = []
+    handler = logging.Handler()
+    handler.emit = records.append
+    logger = logging.getLogger("motiondetect")
+    level = logger.level  # a run with -q before, on this worker, raised it
+    logger.addHandler(handler)
+    logger.setLevel(logging.WARNING)
+    try:
+        discover_inputs([file, str(file)], recursive=False)
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+    assert any("given more than once" in r.getMessage() for r in records), records
+    result = invoke("detect", batch, batch, file, "-o", tmp_path / "o", "-q", "--no-video")
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in (tmp_path / "o").iterdir() if p.is_dir()) == ["v", "w"]
+    assert discover_inputs([tmp_path / "none", tmp_path / "none"], False)[0].name == "none"
 
 
 def test_a_second_run_into_the_same_folder_refuses(tmp_path):

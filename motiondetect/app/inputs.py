@@ -94,8 +94,9 @@ def discover_inputs(
     end), never enters ``output`` or a folder holding the tool's own outputs,
     honours ``include``/``exclude`` globs on the path relative to the scanned
     directory (``*.mp4``, ``Annotations``), and skips files that are not
-    videos with one warning line. Names are unique by construction
-    (:func:`unique_names`).
+    videos with one warning line. An input given twice, or given and also
+    found in a folder given, is taken once (with a warning). Names are
+    unique by construction (:func:`unique_names`).
     """
     scanner = _Scanner(recursive, output, include, exclude)
     jobs: list[InputJob] = []
@@ -106,12 +107,16 @@ def discover_inputs(
         path = Path(given)
         if is_device(path):
             jobs.append(stream_job(str(path)))
+        elif scanner.seen_before(path):
+            log.warning("%s: given more than once (or found in a folder given); taken once", given)
         elif path.is_dir() and not is_frames_folder(path):
+            repeats = scanner.repeats
             found = scanner.scan(path)
-            if not found:
-                jobs.append(InputJob(path, path.name))  # fails later with a clear message
+            if not found and scanner.repeats == repeats:  # none: fails later with a clear message
+                jobs.append(InputJob(path, path.name))
             jobs.extend(found)
         else:
+            scanner.seen.add(path.resolve())
             name = path.name if path.is_dir() else path.stem
             jobs.append(InputJob(path, name or "input"))
     scanner.report()
@@ -128,6 +133,7 @@ class _Scanner:
         self.recursive, self.include, self.exclude = recursive, include, exclude
         self.output = output.resolve() if output is not None else None
         self.seen: set[Path] = set()
+        self.repeats = 0  # inputs a scan found but had taken already
         self.ignored: list[str] = []
 
     def _wanted(self, rel: Path, is_input: bool) -> bool:
@@ -135,9 +141,14 @@ class _Scanner:
             return False
         return not (is_input and self.include) or any(rel.match(p) for p in self.include)
 
+    def seen_before(self, path: Path) -> bool:
+        """Whether ``path`` (its real path) was given or found already."""
+        return path.resolve() in self.seen
+
     def _first_visit(self, path: Path) -> bool:
         real = path.resolve()
         if real in self.seen or real == self.output:
+            self.repeats += real in self.seen
             return False
         self.seen.add(real)
         return True
