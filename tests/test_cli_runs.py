@@ -86,7 +86,11 @@ def test_unwritable_output_is_one_clear_line(tmp_path, clip):
     blocker.write_text("")
     result = invoke("detect", clip, "-o", blocker / "out")
     assert result.exit_code == 1
-    assert result.output.count("\n") == 1 and "not writable" in result.output
+    assert result.output.count("\n") == 1
+    assert f"lies inside {blocker}, which is a file, not a folder" in result.output
+    result = invoke("detect", clip, "-o", blocker)
+    assert result.exit_code == 1 and result.output.count("\n") == 1
+    assert f"output folder {blocker} is a file, not a folder" in result.output
 
 
 def test_missing_input_fails_cleanly(tmp_path):

@@ -100,6 +100,10 @@ def _stopping_on_signals():
 @contextlib.contextmanager
 def output_lock(output: Path):
     """Hold the output folder for this run; a second run into it refuses."""
+    file = next((p for p in (output, *output.parents) if p.is_file()), None)
+    if file is not None:
+        where = "is" if file == output else f"lies inside {file}, which is"
+        raise InputError(f"output folder {output} {where} a file, not a folder")
     try:
         output.mkdir(parents=True, exist_ok=True)
         fp = open(output / LOCK_NAME, "a+")
