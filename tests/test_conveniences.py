@@ -63,6 +63,12 @@ def test_start_and_end_select_one_second_with_the_sources_times(tmp_path):
     run("detect", SAMPLE, "-o", by_frames, "-q", "--no-video", "--start", "30f", "--end", "35f")
     assert [r["frame"] for r in records(by_frames)] == list(range(30, 36))
     assert run("detect", SAMPLE, "-o", tmp_path, "--start", "2", "--end", "1").exit_code == 2
+    assert run("detect", SAMPLE, "-o", tmp_path, "--start", "1", "--end", "1").exit_code == 2
+    one = tmp_path / "one"  # an end frame is included: 33f to 33f is frame 33
+    result = run("detect", SAMPLE, "-o", one, "-q", "--no-video", "--start", "33f", "--end", "33f")
+    assert result.exit_code == 0, result.output
+    assert [r["frame"] for r in records(one)] == [33]
+    assert run("detect", SAMPLE, "-o", tmp_path, "--start", "34f", "--end", "33f").exit_code == 2
 
 
 def test_a_start_past_the_end_says_where_the_input_ends(tmp_path):

@@ -356,8 +356,11 @@ def make_settings(values: dict) -> Settings:
             "--frame-skip cannot be combined with --egomotion (its motions are frame to frame)"
         )
     start, end = run["start"], run["end"]
-    if start and end and start.unit == end.unit and end.value <= start.value:
-        raise SettingsError(f"--end ({end}) must come after --start ({start})")
+    if start and end and start.unit == end.unit:
+        # An end frame is included (10f to 10f is that frame); an end time is not.
+        empty = end.value < start.value if end.unit == "f" else end.value <= start.value
+        if empty:
+            raise SettingsError(f"--end ({end}) must come after --start ({start})")
     for key in ("include", "exclude"):
         globs = (run[key],) if isinstance(run[key], str) else run[key]
         if not all(isinstance(g, str) and g for g in globs):
