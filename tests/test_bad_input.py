@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import logging
 
 import cv2
 import numpy as np
@@ -14,6 +13,7 @@ from motiondetect_cli.main import main
 from motiondetect.io.video import open_source
 
 from .cli_outputs import check_outputs, write_video
+from .logs import warnings_logged
 from .media import encode, turned_quarter
 from .scenes import scene
 
@@ -31,6 +31,14 @@ def one_failure(result, text):
     assert result.exit_code == 1
     assert text in result.output
     assert "Traceback" not in result.output
+
+
+def _read_with_warnings(folder):
+    """(the frames read from ``folder``, whether it was partial, the warnings logged)."""
+    with warnings_logged() as messages, open_source(folder) as source:
+        read = list(source)
+        partial = source.partial
+    return read, partial, messages
 
 
 def test_empty_file(tmp_path):
@@ -124,21 +132,8 @@ def test_gap_and_stray_file_in_frames_folder(tmp_path, frames):
     for n in (1, 2, 3, 7, 8, 10):
         cv2.imwrite(str(seq / f"frame_{n}.jpg"), frames[n])
     (seq / "notes.txt").write_text("stray")
-    records = []
-    handler = logging.Handler()
-    handler.emit = records.append
-    logger = logging.getLogger("motiondetect")
-    level = logger.level
-    logger.addHandler(handler)
-    logger.setLevel(logging.WARNING)
-    try:
-        with open_source(seq) as source:
-            frames_read = list(source)
-            numbers = [f.number for f in frames_read]
-    finally:
-        logger.removeHandler(handler)
-        logger.setLevel(level)
-    messages = [r.getMessage() for r in records if r.levelno == logging.WARNING]
+    frames_read, _, messages = _read_with_warnings(seq)
+    numbers = [f.number for f in frames_read]
     assert any("non-image" in m and "notes.txt" in m for m in messages), messages
     assert any("2 gaps" in m for m in messages), messages
     assert numbers == [1, 2, 3, 7, 8, 10]  # numeric, not lexicographic, order
@@ -175,25 +170,6 @@ def test_unreadable_frame_files_leave_gaps_and_the_rest_keep_their_places(tmp_pa
     assert [round(r["time_s"] * 30, 2) for r in records] == [1, 2, 3, 5, 6, 7]
     masks = sorted(p.name for p in (out / "masks").iterdir())
     assert masks == [f"{n:06d}.png" for n in (1, 2, 3, 5, 6, 7)]
-
-
-def _read_with_warnings(folder):
-    """(the frames read from ``folder``, whether it was partial, the warnings logged)."""
-    records = []
-    handler = logging.Handler()
-    handler.emit = records.append
-    logger = logging.getLogger("motiondetect")
-    level = logger.level
-    logger.addHandler(handler)
-    logger.setLevel(logging.WARNING)
-    try:
-        with open_source(folder) as source:
-            read = list(source)
-            partial = source.partial
-    finally:
-        logger.removeHandler(handler)
-        logger.setLevel(level)
-    return read, partial, [r.getMessage() for r in records if r.levelno == logging.WARNING]
 
 
 def test_a_preview_or_a_first_frame_of_another_size_does_not_set_the_frames_size(tmp_path, frames):

@@ -6,7 +6,6 @@ Every test makes its own files; each reproduces one reported defect.
 from __future__ import annotations
 
 import json
-import logging
 import os
 import signal
 import subprocess
@@ -24,6 +23,7 @@ from motiondetect.app.runner import output_lock, run
 from motiondetect.app.settings import make_settings
 
 from .cli_outputs import invoke, noise_video
+from .logs import warnings_logged
 
 EXE = [sys.executable, "-m", "motiondetect_cli.main"]
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_videos" / "uniform_mixed" / "video.mp4"
@@ -122,19 +122,9 @@ def test_an_input_given_twice_or_also_found_in_a_folder_given_is_taken_once(tmp_
         jobs = discover_inputs(given, recursive=False)
         assert sorted(j.path.name for j in jobs) == (["v.mp4"] if given == [file, file] else
                                                      ["v.mp4", "w.mp4"]), given  # fmt: skip
-    records = []
-    handler = logging.Handler()
-    handler.emit = records.append
-    logger = logging.getLogger("motiondetect")
-    level = logger.level  # a run with -q before, on this worker, raised it
-    logger.addHandler(handler)
-    logger.setLevel(logging.WARNING)
-    try:
+    with warnings_logged() as messages:
         discover_inputs([file, str(file)], recursive=False)
-    finally:
-        logger.removeHandler(handler)
-        logger.setLevel(level)
-    assert any("given more than once" in r.getMessage() for r in records), records
+    assert any("given more than once" in m for m in messages), messages
     result = invoke("detect", batch, batch, file, "-o", tmp_path / "o", "-q", "--no-video")
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in (tmp_path / "o").iterdir() if p.is_dir()) == ["v", "w"]
