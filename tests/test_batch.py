@@ -149,6 +149,15 @@ def test_a_folder_with_one_image_says_so(tmp_path):
     assert "a directory with 1 image and no video; a frames folder needs at least 2" in (
         result.output
     )
+    assert "sub-folder" not in result.output
+    (folder / "0.png").unlink()
+    (folder / "clip").mkdir()  # the frames one level down
+    for i in range(2):
+        cv2.imwrite(str(folder / "clip" / f"{i}.png"), np.zeros((64, 64), np.uint8))
+    result = invoke("detect", folder, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 1
+    assert "its sub-folder is searched with --recursive" in result.output
+    assert invoke("detect", folder, "-o", tmp_path / "o", "-q", "-r").exit_code == 0
 
 
 def test_each_failure_is_printed_once_with_q(tmp_path):

@@ -57,9 +57,14 @@ def open_source(location: str | bytes | Path, frames_fps: float | None = None) -
     if path.is_dir():
         if not is_frames_folder(path):
             images = sum(1 for e in path.iterdir() if e.suffix.lower() in IMAGE_EXTENSIONS)
+            folders = sum(1 for e in path.iterdir() if e.is_dir() and not e.name.startswith("."))
+            deeper = ""
+            if folders:
+                which = "its sub-folder is" if folders == 1 else f"its {folders} sub-folders are"
+                deeper = f"; {which} searched with --recursive"
             raise VideoError(
                 f"{path}: a directory with {images} image{'s' if images != 1 else ''} and no "
-                "video; a frames folder needs at least 2 images"
+                f"video; a frames folder needs at least 2 images{deeper}"
             )
         return FramesFolderSource(path, frames_fps)
     try:
