@@ -170,9 +170,9 @@ class FramesFolderSource(FrameSource):
         another size) leaves a gap in both, as a frame left out of the
         numbering leaves one in time, so the frames after it keep their
         own times (and ground truth, or poses, numbered as the files)."""
-        size = _size(self._first)
+        size, first = _size(self._first), self._first_at
         for i, file in enumerate(self._files):
-            image = None if i < self._first_at else self._read_again(i, file)
+            image = self._first if i == first else None if i < first else self._read(file)
             if image is None or _size(image) != size:
                 log.warning("%s: skipping unreadable or differently sized frame", file)
                 self.partial = True
@@ -183,10 +183,6 @@ class FramesFolderSource(FrameSource):
                 yield DecodedFrame(i, time_s, image, 0, number)
             else:
                 yield SourceFrame(i, time_s, image, number)
-
-    def _read_again(self, i: int, file: Path) -> np.ndarray | av.VideoFrame | None:
-        """The ``i``-th file's image: the first readable one as read to open the folder."""
-        return self._first if i == self._first_at else self._read(file)
 
     @property
     def frame_numbers(self) -> list[int]:

@@ -56,8 +56,9 @@ def open_source(location: str | bytes | Path, frames_fps: float | None = None) -
     path = Path(os.fsdecode(location))
     if path.is_dir():
         if not is_frames_folder(path):
-            images = sum(1 for e in path.iterdir() if e.suffix.lower() in IMAGE_EXTENSIONS)
-            folders = sum(1 for e in path.iterdir() if e.is_dir() and not e.name.startswith("."))
+            entries = list(path.iterdir())
+            images = sum(e.suffix.lower() in IMAGE_EXTENSIONS for e in entries)
+            folders = sum(e.is_dir() and not e.name.startswith(".") for e in entries)
             deeper = ""
             if folders:
                 which = "its sub-folder is" if folders == 1 else f"its {folders} sub-folders are"
