@@ -126,6 +126,21 @@ def test_16_bit_and_grey_sequences(tmp_path, frames, kind):
     check_outputs(tmp_path / "o" / kind, 6)
 
 
+@pytest.mark.parametrize("suffix", [".pgm", ".ppm", ".webp"])
+def test_netpbm_and_webp_frames_folders(tmp_path, frames, suffix):
+    """PGM/PPM dumps (robot and lab cameras) and WebP frames are frames
+    folders like JPEG and PNG ones; before, their files were not images and
+    the folder was 'a directory with 0 images'."""
+    seq = tmp_path / suffix[1:]
+    seq.mkdir()
+    for i, f in enumerate(frames[:6]):
+        image = cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) if suffix == ".pgm" else f
+        assert cv2.imwrite(str(seq / f"{i:04d}{suffix}"), image)
+    result = run("detect", seq, "-o", tmp_path / "o", "-q")
+    assert result.exit_code == 0, result.output
+    check_outputs(tmp_path / "o" / suffix[1:], 6)
+
+
 def test_gap_and_stray_file_in_frames_folder(tmp_path, frames):
     seq = tmp_path / "seq"
     seq.mkdir()

@@ -13,11 +13,13 @@ from fractions import Fraction
 from pathlib import Path
 
 import av
+import cv2
 import numpy as np
 import pytest
 from click.testing import CliRunner
 from motiondetect_cli.main import main
 
+from motiondetect.app.inputs import discover_inputs
 from motiondetect.io.decode import STREAM_PROBE
 from motiondetect.io.video import open_source
 
@@ -385,3 +387,27 @@ def test_an_audio_file_with_a_cover_picture_is_one_line(tmp_path):
     result = run("detect", path, "-o", tmp_path / "o", "-q")
     assert result.exit_code == 1 and "Traceback" not in result.output
     assert "song.m4a: no video stream, only a cover picture" in result.output
+
+
+def test_raw_streams_and_mjpeg_are_videos_a_batch_finds(tmp_path, frames):
+    """H.264 and H.265 elementary streams, IVF and MJPEG (JPEGs one after
+    another, as IP cameras dump them) are videos: a batch finds them and
+    each is processed whole. Before, a batch skipped them as not videos, and
+    an MJPEG file named on the command line was 'a still image' (it starts
+    as a JPEG does); a single JPEG so named still is."""
+    folder = tmp_path / "dump"
+    folder.mkdir()
+    encode(folder / "cam.h264", frames, fmt="h264", rate=25)
+    encode(folder / "cam.ivf", frames, "libvpx", fmt="ivf", rate=25)
+    encode(folder / "ip.mjpeg", frames, "mjpeg", fmt="mjpeg", rate=25, pix_fmt="yuvj420p")
+    jobs = discover_inputs([folder], recursive=False)
+    assert sorted(j.path.name for j in jobs) == ["cam.h264", "cam.ivf", "ip.mjpeg"]
+    result = run("detect", folder, "-o", tmp_path / "o", "-q", "--no-video")
+    assert result.exit_code == 0, result.output
+    for name in ("cam.h264", "cam.ivf", "ip"):  # a shared name keeps its extension
+        assert len(times_of(tmp_path / "o" / name)) == N, name
+    still = tmp_path / "still.mjpeg"
+    ok, buffer = cv2.imencode(".jpg", frames[0])
+    still.write_bytes(buffer.tobytes())
+    result = run("detect", still, "-o", tmp_path / "o2", "-q")
+    assert result.exit_code == 1 and "still.mjpeg: a still image, not a video" in result.output

@@ -13,10 +13,17 @@ from dataclasses import asdict, dataclass
 import cv2
 import numpy as np
 
-IMAGE_EXTENSIONS = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff"}
+#: Frame files OpenCV decodes to 8 or 16 bits: also WebP (frames saved from
+#: the web) and the Netpbm formats (PGM/PPM dumps of robot and lab cameras).
+IMAGE_EXTENSIONS = {
+    ".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pnm",
+}  # fmt: skip
+#: Video files a batch finds: containers, and the raw streams cameras and
+#: encoders leave (H.264/H.265 elementary streams, IVF, MJPEG).
 VIDEO_EXTENSIONS = {
     ".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv", ".flv",
-    ".ts", ".mts", ".m2ts", ".3gp", ".ogv", ".y4m",
+    ".ts", ".mts", ".m2ts", ".3gp", ".ogv", ".y4m", ".mxf", ".vob", ".m2v", ".f4v", ".asf",
+    ".h264", ".264", ".h265", ".265", ".hevc", ".ivf", ".mjpeg", ".mjpg",
 }  # fmt: skip
 DEFAULT_FRAMES_FPS = 30.0
 MIN_FRAME_SIDE = 64

@@ -75,14 +75,16 @@ def open_source(location: str | bytes | Path, frames_fps: float | None = None) -
         raise VideoError(f"{path}: no such file or directory") from None
     except OSError as exc:
         raise VideoError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    if head.startswith(_IMAGE_MAGIC) and not (head.startswith(b"GIF8") and is_animated(path)):
+    # A GIF, or JPEGs one after another (an MJPEG stream), with two frames is a video.
+    moving = head.startswith((b"GIF8", b"\xff\xd8\xff")) and is_animated(path)
+    if head.startswith(_IMAGE_MAGIC) and not moving:
         raise VideoError(f"{path}: a still image, not a video")
     return AvSource(path, display_name(path))
 
 
 def is_animated(path: Path) -> bool:
-    """Whether an image file holds at least two frames: an animated GIF is a
-    video, a still one an image."""
+    """Whether an image file holds at least two frames: an animated GIF, or
+    an MJPEG stream, is a video; a still image is not."""
     try:
         with av.open(str(path)) as container:
             packets = (p for p in container.demux(video=0) if p.size)
