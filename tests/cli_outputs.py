@@ -42,6 +42,12 @@ def invoke(*args: str) -> object:
     return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
 
 
+def times_of(out: Path) -> list[float]:
+    """Each frame's ``time_s`` in an output folder's ``frames.jsonl``."""
+    lines = (out / "frames.jsonl").read_text(encoding="utf-8").splitlines()
+    return [json.loads(line)["time_s"] for line in lines]
+
+
 def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = True) -> dict:
     summary = json.loads((out / "summary.json").read_text())
     jsonschema.validate(summary, SUMMARY_SCHEMA)

@@ -21,6 +21,7 @@ from motiondetect_cli.main import main
 from motiondetect.io.decode import STREAM_PROBE
 from motiondetect.io.video import open_source
 
+from .cli_outputs import times_of
 from .media import corrupt, encode, has_encoder, pts_times, stream_info
 from .scenes import scene
 
@@ -40,11 +41,6 @@ def frames():
 
 def summary_of(out: Path) -> dict:
     return json.loads((out / "summary.json").read_text(encoding="utf-8"))
-
-
-def times_of(out: Path) -> list[float]:
-    lines = (out / "frames.jsonl").read_text(encoding="utf-8").splitlines()
-    return [json.loads(line)["time_s"] for line in lines]
 
 
 def test_interlaced_h264_is_deinterlaced_into_real_pictures(tmp_path, frames):

@@ -4,37 +4,24 @@ bad-input table, docs/robustness.md)."""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import av
 import cv2
 import numpy as np
 import pytest
-from click.testing import CliRunner
-from motiondetect_cli.main import main
 
 from motiondetect.app.inputs import discover_inputs
 from motiondetect.io.video import open_source
 
+from .cli_outputs import invoke, times_of
 from .media import encode
 from .scenes import scene
 
 N = 12
 
 
-def run(*args):
-    return CliRunner().invoke(main, [str(a) for a in args])
-
-
 @pytest.fixture(scope="module")
 def frames():
     return [fr.image for fr in scene("pan", ("smooth",), frames=N)]
-
-
-def times_of(out: Path) -> list[float]:
-    lines = (out / "frames.jsonl").read_text(encoding="utf-8").splitlines()
-    return [json.loads(line)["time_s"] for line in lines]
 
 
 def test_a_thumbnail_stream_before_the_video_is_not_read_as_the_video(tmp_path, frames):
@@ -55,7 +42,7 @@ def test_a_thumbnail_stream_before_the_video_is_not_read_as_the_video(tmp_path, 
     with open_source(path) as source:
         assert (source.info.width, source.info.height, source.info.codec) == (w, h, "h264")
         assert sum(1 for _ in source) == N
-    result = run("detect", path, "-o", tmp_path / "o", "-q", "--no-video")
+    result = invoke("detect", path, "-o", tmp_path / "o", "-q", "--no-video")
     assert result.exit_code == 0, result.output
     assert len(times_of(tmp_path / "o" / "thumb_first")) == N
 
@@ -90,7 +77,7 @@ def test_an_audio_file_with_a_cover_picture_is_one_line(tmp_path):
         sound.sample_rate = 44100
         container.mux(audio.encode(sound))
         container.mux(audio.encode())
-    result = run("detect", path, "-o", tmp_path / "o", "-q")
+    result = invoke("detect", path, "-o", tmp_path / "o", "-q")
     assert result.exit_code == 1 and "Traceback" not in result.output
     assert "song.m4a: no video stream, only a cover picture" in result.output
 
@@ -108,12 +95,12 @@ def test_raw_streams_and_mjpeg_are_videos_a_batch_finds(tmp_path, frames):
     encode(folder / "ip.mjpeg", frames, "mjpeg", fmt="mjpeg", rate=25, pix_fmt="yuvj420p")
     jobs = discover_inputs([folder], recursive=False)
     assert sorted(j.path.name for j in jobs) == ["cam.h264", "cam.ivf", "ip.mjpeg"]
-    result = run("detect", folder, "-o", tmp_path / "o", "-q", "--no-video")
+    result = invoke("detect", folder, "-o", tmp_path / "o", "-q", "--no-video")
     assert result.exit_code == 0, result.output
     for name in ("cam.h264", "cam.ivf", "ip"):  # a shared name keeps its extension
         assert len(times_of(tmp_path / "o" / name)) == N, name
     still = tmp_path / "still.mjpeg"
     ok, buffer = cv2.imencode(".jpg", frames[0])
     still.write_bytes(buffer.tobytes())
-    result = run("detect", still, "-o", tmp_path / "o2", "-q")
+    result = invoke("detect", still, "-o", tmp_path / "o2", "-q")
     assert result.exit_code == 1 and "still.mjpeg: a still image, not a video" in result.output
