@@ -32,6 +32,13 @@ region is a false alarm) are written into ``OUT`` with
   with probability ``P``, smeared along a line of a random direction and a
   length of 2-6 % of the width (a 1/30 s shutter on a jolt); the ground
   truth is unchanged (heavy blur: the frames the tool may call unreliable);
+* ``--vibration A``: a mount's vibration (a vehicle, a walking operator):
+  the view displaced by ``A`` of the width along each axis by two sines of
+  6-12 Hz (30 frames a second assumed), seen through a rolling shutter that
+  reads the rows top to bottom over ``--readout R`` of the frame period (a
+  phone's CMOS sensor is about 0.5-0.9; 0, a global shutter, displaces each
+  frame whole); each row shows the view at its own read time, so the picture
+  wobbles (the "jello" effect) and the masks with it;
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -71,6 +78,32 @@ def _lens(image: np.ndarray, k: float, nearest: bool = False) -> np.ndarray:
     if k == 0:
         return image
     map_x, map_y = barrel_maps(image.shape[1], image.shape[0], k)
+    interpolation = cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR
+    return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REFLECT)
+
+
+def vibration_path(rng, amplitude: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Amplitudes (2, 2), angular frequencies (2, 2) in rad/s and phases
+    (2, 2): two sines per axis (rows x, y), together at most ``amplitude``."""
+    return (
+        rng.uniform(0.5, 1.0, (2, 2)) * amplitude / 2,
+        2 * np.pi * rng.uniform(6.0, 12.0, (2, 2)),
+        rng.uniform(0.0, 2 * np.pi, (2, 2)),
+    )
+
+
+def wobbled(
+    image: np.ndarray, t: int, path: tuple, readout: float, nearest: bool = False
+) -> np.ndarray:
+    """Frame ``t`` with each row displaced as ``path`` (in widths) has the
+    view at that row's read time, ``(t + readout * row / height) / 30`` s."""
+    h, w = image.shape[:2]
+    amplitude, omega, phase = path
+    times = (t + readout * np.arange(h) / h) / 30.0
+    shift = (amplitude[..., None] * np.sin(omega[..., None] * times + phase[..., None])).sum(1)
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
+    map_x = xs + (w * shift[0])[:, None].astype(np.float32)
+    map_y = ys + (w * shift[1])[:, None].astype(np.float32)
     interpolation = cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR
     return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REFLECT)
 
@@ -157,9 +190,12 @@ def degraded(
 def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: int) -> None:
     """Write each of ``frames`` degraded into ``target``, under its own name."""
     rng = np.random.default_rng(seed)
+    path = vibration_path(np.random.default_rng(1000 + seed), args.vibration)
     target.mkdir(parents=True, exist_ok=True)
-    for t, path in enumerate(frames):
-        image = cv2.imread(str(path))
+    for t, frame in enumerate(frames):
+        image = cv2.imread(str(frame))
+        if args.vibration > 0:
+            image = wobbled(image, t, path, args.readout)
         if t == 0:
             part = dashboard(image)
         smear = None
@@ -170,22 +206,26 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
             args.distortion, args.overlay, args.letterbox, args.pillarbox, args.blurred_sides,
             smear,
         )  # fmt: skip
-        cv2.imwrite(str(target / path.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
+        cv2.imwrite(str(target / frame.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
 
-def _truth(source: Path, target: Path, args: argparse.Namespace) -> None:
+def _truth(source: Path, target: Path, args: argparse.Namespace, seed: int) -> None:
     """The ground truth: linked, or its masks warped through the lens and
     given the frames' bars."""
     if target.exists():
         return
     target.parent.mkdir(parents=True, exist_ok=True)
-    changed = args.distortion != 0 or args.letterbox > 0 or args.pillarbox > 0 or args.hood > 0
+    changed = args.distortion != 0 or max(args.letterbox, args.pillarbox, args.hood) > 0
+    changed = changed or args.vibration > 0
     if not changed or not source.is_dir():
         target.symlink_to(source.resolve())
         return
     target.mkdir()
-    for mask in sorted(source.glob("*.png")):
+    path = vibration_path(np.random.default_rng(1000 + seed), args.vibration)
+    for t, mask in enumerate(numbered(source, ".png")):
         image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
+        if args.vibration > 0:
+            image = wobbled(image, t, path, args.readout, nearest=True)
         if args.hood > 0:
             image = image.copy()
             image[hood_mask(image.shape[1], image.shape[0], args.hood)] = 0
@@ -205,13 +245,15 @@ def main() -> None:
     parser.add_argument("--blurred-sides", action="store_true", help="fill the side bars")
     parser.add_argument("--hood", type=float, default=0.0, help="camera-fixed share, 0-0.5")
     parser.add_argument("--shake", type=float, default=0.0, help="share of frames smeared, 0-1")
+    parser.add_argument("--vibration", type=float, default=0.0, help="share of the width")
+    parser.add_argument("--readout", type=float, default=0.0, help="share of the frame period")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
         parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")
     if not (0 <= args.letterbox <= 0.5 and 0 <= args.pillarbox <= 0.5 and 0 <= args.hood <= 0.5):
         parser.error("--letterbox, --pillarbox and --hood must be in [0, 0.5]")
-    if not 0 <= args.shake <= 1:
-        parser.error("--shake must be in [0, 1]")
+    if not (0 <= args.shake <= 1 and 0 <= args.readout <= 1 and 0 <= args.vibration <= 0.1):
+        parser.error("--shake and --readout must be in [0, 1], --vibration in [0, 0.1]")
     clips = [(im, truth, args.out / group / im.parent.name) for im, truth, group in moving_clips()]
     fox = SHARED_DATA / "fox"
     if (fox / "images").is_dir():
@@ -219,7 +261,7 @@ def main() -> None:
     for seed, (images, truth, target) in enumerate(clips):
         frames = numbered(images, ".jpg") or numbered(images, ".png")
         degrade(frames, target / images.name, args, seed)
-        _truth(truth, target / truth.name, args)
+        _truth(truth, target / truth.name, args, seed)
     print(f"{len(clips)} clips written into {args.out}")
 
 

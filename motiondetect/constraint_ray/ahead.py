@@ -23,9 +23,11 @@ from motiondetect.constraint_ray.plane import (
     explained_share,
     fit_homography,
     plane_residual,
+    point_residual,
     samples,
 )
-from motiondetect.measurement.dense_flow import VelocityField
+from motiondetect.constraint_ray.rolling_shutter import LineOffsets, line_offsets
+from motiondetect.measurement.dense_flow import VelocityField, vector_length
 from motiondetect.measurement.image_change import difference_noise, plane_difference, sharpness
 
 
@@ -63,22 +65,77 @@ class PlaneMaps:
 
 
 def plane_maps(
-    field: VelocityField, homography: np.ndarray | None, inliers: np.ndarray, config: FitConfig
+    field: VelocityField,
+    homography: np.ndarray | None,
+    inliers: np.ndarray,
+    config: FitConfig,
+    lines: LineOffsets | None = None,
 ) -> PlaneMaps:
     """:class:`PlaneMaps` of ``homography`` on ``field``, its RANSAC ``inliers``
-    among the samples given."""
+    among the samples given; with ``lines``, the plane's velocity plus the
+    rolling shutter's offsets."""
     if homography is None:
         share = float(inliers.mean()) if len(inliers) else 0.0
         return PlaneMaps(None, None, None, None, 0.0, share, 0.0)
-    difference = plane_difference(field, homography)
+    offsets = None if lines is None else lines.field(field.shape)
+    difference = plane_difference(field, homography, offsets)
     change_noise = difference_noise(difference)
     residual = plane_residual(field, homography)
+    if offsets is not None:
+        residual = residual - offsets
     step = config.sample_step_px
     sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
     energy = (config.aperture_noise * change_noise) ** 2
     share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
     cut = float(difference[8:-8, 8:-8].mean())
     return PlaneMaps(difference, change_noise, residual, sampled, energy, share, cut)
+
+
+def wobble_removed(
+    field: VelocityField,
+    ahead: Ahead,
+    homography: np.ndarray,
+    inliers: np.ndarray,
+    maps: PlaneMaps,
+    movers: np.ndarray | None = None,
+    previous: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, PlaneMaps]:
+    """The plane, its inliers and its maps with a rolling shutter's wobble
+    taken out where the plane leaves one (:mod:`.rolling_shutter`): the
+    plane fitted again to the velocities without the wobble, whose lines
+    are then measured again against it. As given where there is none, and
+    with ``[fit] line_gain`` 0 or a plane explaining too little to judge.
+    ``movers`` (h, w) bool: the known movers (the tracks' predicted boxes),
+    whose samples the wobble is not measured on; ``previous`` (N, 2): the
+    last frame's plane residual at the samples (a wobble comes and goes;
+    without it, nothing is taken out)."""
+    config, points = ahead.config, ahead.points
+    if config.line_gain <= 0 or maps.sampled is None or maps.share < config.min_inlier_share:
+        return homography, inliers, maps
+    step, (h, w) = config.sample_step_px, field.shape
+    grid = (np.arange(step, h - step, step), np.arange(step, w - step, step))
+    size = (len(grid[0]), len(grid[1]), 2)
+    scene = None
+    if movers is not None:
+        scene = ~movers[points[:, 1].astype(int), points[:, 0].astype(int)].reshape(size[:2])
+    if previous is None or len(previous) != len(points):
+        return homography, inliers, maps  # a wobble is told from parallax by its change
+    last = previous.reshape(size)
+    args = (grid, config.line_gain, (h, w), config.ransac_px, scene, last)
+    lines = line_offsets(maps.sampled.reshape(size), *args)
+    if lines is None:
+        return homography, inliers, maps
+    kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
+    refit, _ = fit_homography(points, ahead.velocity - lines.at(points), config.ransac_px, **kwargs)
+    sampled = maps.sampled
+    if refit is not None:
+        homography = refit
+        sampled = point_residual(points, ahead.velocity, refit).astype(np.float32)
+        lines = line_offsets(sampled.reshape(size), *args)
+    if lines is not None:
+        sampled = sampled - lines.at(points)
+    inliers = vector_length(sampled) < config.ransac_px
+    return homography, inliers, plane_maps(field, homography, inliers, config, lines)
 
 
 @dataclass(frozen=True)

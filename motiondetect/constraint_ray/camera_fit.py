@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from motiondetect.constraint_ray.ahead import Ahead, ahead_of, plane_maps
+from motiondetect.constraint_ray.ahead import Ahead, ahead_of, plane_maps, wobble_removed
 from motiondetect.constraint_ray.epipole import fit_epipole, off_ray
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.plane import (
@@ -100,6 +100,10 @@ class CameraFit:
         occluder are left out (:mod:`.layer_order` tests its layer).
     voted_inliers : (N,) ndarray of bool or None
         Its RANSAC inliers among the samples (:func:`~.plane.samples`).
+    plane_sampled : (N, 2) ndarray of float32 or None
+        The plane's residual at the samples before a rolling shutter's
+        wobble is taken out: the next frame's fit reads it
+        (:func:`~.ahead.wobble_removed`).
 
     Derived maps that several detectors read (:meth:`image_changed`,
     :meth:`residual_length`) are computed once per fit and kept.
@@ -121,6 +125,7 @@ class CameraFit:
     plane_speed_px: float = 0.0
     voted: np.ndarray | None = None
     voted_inliers: np.ndarray | None = None
+    plane_sampled: np.ndarray | None = None
     _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def difference_sigma(self) -> float:
@@ -256,14 +261,14 @@ def fit_camera(
     reference_sharpness: float | None = None,
     movers: np.ndarray | None = None,
     occluder: tuple[np.ndarray, np.ndarray] | None = None,
+    previous_sampled: np.ndarray | None = None,
 ) -> CameraFit:
     """Fit the observer's motion to one frame's velocity field.
 
     Parameters
     ----------
-    field : VelocityField
-    config : FitConfig
-    previous_epipole : (3,) ndarray, optional
+    field, config : VelocityField, FitConfig
+    previous_epipole, previous_sampled : the last fit's ``epipole`` and ``plane_sampled``
     reference_sharpness : float, optional
         The recent frames' median :func:`sharpness`; none: no blur test.
     movers : (h, w) ndarray of bool, optional
@@ -285,6 +290,10 @@ def fit_camera(
     maps = ahead.maps if homography is ahead.voted[0] else None  # most frames keep it
     if maps is None:
         maps = plane_maps(field, homography, inliers, config)
+    plain = maps.sampled
+    homography, inliers, maps = wobble_removed(
+        field, ahead, homography, inliers, maps, movers, previous_sampled
+    )
     difference, residual, sampled, share = maps.difference, maps.residual, maps.sampled, maps.share
     sharp = ahead.sharpness
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
@@ -293,7 +302,7 @@ def fit_camera(
     if reason:
         return CameraFit(
             homography, None, 0.0, share, None, reason, speed, edge_band_px=edge, sharpness=sharp,
-            voted=voted[0], voted_inliers=voted[1],
+            voted=voted[0], voted_inliers=voted[1], plane_sampled=plain,
         )  # fmt: skip
     magnitude = np.hypot(sampled[:, 0], sampled[:, 1])
     noise = float(np.median(magnitude[inliers]) * MEDIAN_TO_SIGMA) if inliers.any() else 0.0
@@ -302,7 +311,7 @@ def fit_camera(
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         maps.change_noise, sharp, maps.energy, float(np.median(vector_length(velocity - sampled))),
-        voted[0], voted[1],
+        voted[0], voted[1], plain,
     )  # fmt: skip
 
 

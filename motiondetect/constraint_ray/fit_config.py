@@ -149,6 +149,12 @@ class FitConfig:
         (0.75: a phone's main camera, 26 mm equivalent), for decomposing
         the plane's motion into the constraint ray
         (:mod:`~.plane_ray`; 0: no decomposition).
+    line_gain : float
+        A rolling shutter's wobble (:mod:`~.rolling_shutter`) is taken out
+        of the plane's residual when a function of the sensor line alone
+        takes at least this share off the residual's median length in each
+        strip across the lines (0, the default: never; 0.15 measured in
+        docs/detectors.md, "A rolling shutter's wobble").
     seed : int
         Which random samples RANSAC draws (and the epipole's hypotheses):
         0, the default, is OpenCV's own draw. Another seed gives another,
@@ -177,6 +183,7 @@ class FitConfig:
     rest_spread_quantile: float = 0.9
     rest_spread_ratio: float = 0.5
     focal_share: float = 0.75
+    line_gain: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -206,6 +213,7 @@ class FitConfig:
                 "occluder_margin",
                 "occluder_coherence",
                 "rest_spread_ratio",
+                "line_gain",
             ),
         )
         if not 0 <= self.rest_spread_quantile < 1:

@@ -63,10 +63,15 @@ def ransac_homography(
     return homography
 
 
+def point_residual(points: np.ndarray, velocity: np.ndarray, homography: np.ndarray) -> np.ndarray:
+    """velocity - the plane's velocity at each point, (N, 2) px/frame."""
+    previous = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), homography)
+    return previous.reshape(-1, 2) - (points - velocity)
+
+
 def plane_error(points: np.ndarray, velocity: np.ndarray, homography: np.ndarray) -> np.ndarray:
     """|velocity - the plane's velocity| at each point, (N,) px/frame."""
-    previous = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), homography)
-    return np.hypot(*(previous.reshape(-1, 2) - (points - velocity)).T)
+    return np.hypot(*point_residual(points, velocity, homography).T)
 
 
 def mixture_log_likelihood(error: np.ndarray, outlier_px: float) -> np.ndarray | float:

@@ -113,6 +113,7 @@ class MotionDetector:
         else:
             self.pipeline = NormalFlowPipeline(by_type.get(StageConfig))
         self._epipole: np.ndarray | None = None
+        self._sampled: np.ndarray | None = None  # the last plane residual at the samples
         self._recent: list[np.ndarray] = []
         self._sharpness: collections.deque = collections.deque(maxlen=self.fit_config.blur_history)
         self._picture: Picture | None = None
@@ -133,7 +134,7 @@ class MotionDetector:
         self.tracker.reset()
         for det in self.detectors.values():
             det.reset()
-        self._epipole, self._recent = None, []
+        self._epipole, self._sampled, self._recent = None, None, []
         self._order.reset()
         self._sharpness.clear()
         self._history.reset()
@@ -293,11 +294,13 @@ class MotionDetector:
         the blur reference, the epipole and the layer order learn from it."""
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         occluder = self._order.occluder  # a mover that fills the view and took the plane
-        fit = fit_camera(flow, self.fit_config, self._epipole, reference, predicted, occluder)
+        fit = fit_camera(
+            flow, self.fit_config, self._epipole, reference, predicted, occluder, self._sampled
+        )
         self._order.update(flow, fit.voted, fit.voted_inliers, fit.edge_band_px)
         if self.fit_config.blur_ratio > 0:  # the blur test's reference
             self._sharpness.append(fit.sharpness)
-        self._epipole = fit.epipole
+        self._epipole, self._sampled = fit.epipole, fit.plane_sampled
         return fit
 
     def _interval(self, time_s: float) -> float | None:

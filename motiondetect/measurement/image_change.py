@@ -61,9 +61,18 @@ def matched_exposure(older: np.ndarray, current: np.ndarray) -> np.ndarray:
     return older * np.float32(gain)
 
 
-def plane_difference(field: VelocityField, homography: np.ndarray) -> np.ndarray:
-    """``|grey - previous grey warped by the plane|``, (h, w) uint8 grey levels."""
+def plane_difference(
+    field: VelocityField, homography: np.ndarray, offsets: np.ndarray | None = None
+) -> np.ndarray:
+    """``|grey - previous grey warped by the plane|``, (h, w) uint8 grey levels;
+    ``offsets`` (h, w, 2) work px/frame, the velocity a rolling shutter adds
+    to the plane's (:mod:`~motiondetect.constraint_ray.rolling_shutter`)."""
     h, w = field.shape
+    if offsets is not None:
+        grid = field.pixel_grid.reshape(-1, 1, 2)
+        previous = cv2.perspectiveTransform(grid, homography).reshape(h, w, 2) - offsets
+        warped = cv2.remap(field.previous_grey, previous, None, cv2.INTER_LINEAR)
+        return cv2.absdiff(warped, field.grey)
     flags = cv2.WARP_INVERSE_MAP
     warped = cv2.warpPerspective(field.previous_grey, homography, (w, h), flags=flags)
     return cv2.absdiff(warped, field.grey)
