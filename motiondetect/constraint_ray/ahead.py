@@ -115,11 +115,11 @@ def wobble_removed(
     step, (h, w) = config.sample_step_px, field.shape
     grid = (np.arange(step, h - step, step), np.arange(step, w - step, step))
     size = (len(grid[0]), len(grid[1]), 2)
+    if previous is None or len(previous) != len(points):
+        return homography, inliers, maps  # a wobble is told from parallax by its change
     scene = None
     if movers is not None:
         scene = ~movers[points[:, 1].astype(int), points[:, 0].astype(int)].reshape(size[:2])
-    if previous is None or len(previous) != len(points):
-        return homography, inliers, maps  # a wobble is told from parallax by its change
     last = previous.reshape(size)
     args = (grid, config.line_gain, (h, w), config.ransac_px, scene, last)
     lines = line_offsets(maps.sampled.reshape(size), *args)
@@ -129,12 +129,12 @@ def wobble_removed(
     refit, _ = fit_homography(points, ahead.velocity - lines.at(points), config.ransac_px, **kwargs)
     sampled = maps.sampled
     if refit is not None:
-        homography = refit
         sampled = point_residual(points, ahead.velocity, refit).astype(np.float32)
-        lines = line_offsets(sampled.reshape(size), *args)
-    if lines is not None:
-        sampled = sampled - lines.at(points)
-    inliers = vector_length(sampled) < config.ransac_px
+        again = line_offsets(sampled.reshape(size), *args)
+        if again is None:  # measured against the plane refitted, there is none
+            return homography, inliers, maps
+        homography, lines = refit, again
+    inliers = vector_length(sampled - lines.at(points)) < config.ransac_px
     return homography, inliers, plane_maps(field, homography, inliers, config, lines)
 
 

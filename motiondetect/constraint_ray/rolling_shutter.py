@@ -21,7 +21,7 @@ is explained only where that surface lies, and is left as it was. A mover
 fills a few rows of samples at most; the polynomial's robust weights outvote them.
 Video rotated after decoding (an upright phone clip) was read along its
 columns, so both axes are tried and the one that explains more is kept.
-Pure functions of one frame's samples.
+Pure functions of one frame's samples and the last frame's.
 """
 
 from __future__ import annotations
