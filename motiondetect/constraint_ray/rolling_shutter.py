@@ -163,10 +163,7 @@ def _laid(medians: np.ndarray, kept: np.ndarray, axis: int) -> np.ndarray:
     """The ``medians`` (k, 2) of the ``kept`` lines along ``axis``, laid
     over the (r, c, 2) grid (zero on the lines not kept)."""
     out = np.zeros((len(kept), 1, 2) if axis == 0 else (1, len(kept), 2), np.float32)
-    if axis == 0:
-        out[kept] = medians[:, None, :]
-    else:
-        out[:, kept] = medians[None, :, :]
+    out[(kept,) if axis == 0 else (slice(None), kept)] = _spread(medians, axis)
     return out
 
 
