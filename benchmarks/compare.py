@@ -30,12 +30,12 @@ from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.streaming import AUTO, auto_frame_skip
 from motiondetect.io.files import last_number
 from motiondetect.io.video import open_source, read_mask
-from motiondetect.tools.evaluate import (
-    Counts,
+from motiondetect.tools.evaluate import Counts, score_box, score_frame
+from motiondetect.tools.ground_truth import (
+    aligned_truth,
     find_gt_folder,
+    index_by_number,
     read_boxes,
-    score_box,
-    score_frame,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -105,20 +105,22 @@ def sequences(quick: bool, synth: bool = False) -> list[tuple[str, Path, Path | 
     return out
 
 
-def gt_masks(gt: Path | None) -> dict[int, Path]:
+def gt_masks(gt: Path | None, source=None) -> dict[int, Path]:
+    """{frame index: GT mask}, aligned as ``motiondetect evaluate`` aligns
+    them: by the numbers of an open frames folder ``source``'s files."""
     if gt is None or gt.suffix == ".txt":
         return {}
     folder = find_gt_folder(gt)
     files = sorted((p for p in folder.iterdir() if p.suffix.lower() == ".png"), key=last_number)
-    first = last_number(files[0])
-    return {last_number(p) - first: p for p in files}
+    numbers = getattr(source, "frame_numbers", None)
+    return aligned_truth(files, numbers and index_by_number((n, i) for i, n in enumerate(numbers)))
 
 
 def run_sequence(source: Path, gt: Path | None, methods) -> dict[str, tuple[Counts, float]]:
-    masks = gt_masks(gt)
     boxes = read_boxes(gt) if gt is not None and gt.suffix == ".txt" else None
     results = {m.name: [Counts(), 0.0] for m in methods}
     with open_source(source) as src:
+        masks = gt_masks(gt, src)
         for frame in src:
             image = frame.image
             if image.ndim == 2:

@@ -29,11 +29,11 @@ def tally(job: tuple) -> tuple[str, np.ndarray]:
     """(name, [tp, near fp, far fp, fn]) of one sequence."""
     name, source, gt, ring = job
     cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
     detector = MotionDetector("both")
     kernel = np.ones((2 * ring + 1, 2 * ring + 1), np.uint8)
     counts = np.zeros(4, np.int64)
     with open_source(source) as frames:
+        masks = compare.gt_masks(gt, frames)
         for frame in frames:
             result = detector.process(frame.grey, frame.index, frame.time_s)
             if frame.index < compare.WARMUP or frame.index not in masks:

@@ -46,10 +46,10 @@ def found_parts(truth: np.ndarray, flagged: np.ndarray) -> list[tuple[int, bool]
 def _run(job: tuple) -> tuple[str, tuple[int, int, int, int, int]]:
     name, source, gt, configs = job
     cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
     ours = compare.Ours(configs=configs)
     found = parts = movers = frames = lost = 0
     with open_source(source) as video:
+        masks = compare.gt_masks(gt, video)
         for frame in video:
             pred = ours(frame.grey, frame.time_s)
             if frame.index < compare.WARMUP or frame.index not in masks:

@@ -83,9 +83,9 @@ def scored_frames(job: tuple, detector: MotionDetector | None = None):
     ``compare.WARMUP`` or without a mask are not yielded."""
     _, source, gt, sections = job
     cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
     detector = detector or MotionDetector("both", *sections)
     with open_source(source) as frames:
+        masks = compare.gt_masks(gt, frames)
         for frame in frames:
             result = detector.process(frame.grey, frame.index, frame.time_s)
             if frame.index >= compare.WARMUP and frame.index in masks:

@@ -46,10 +46,10 @@ def main_id(truth: np.ndarray, regions: list) -> int | None:
 def _run(job: tuple) -> tuple[str, int, int, int, int]:
     name, source, gt, configs = job
     cv2.setNumThreads(1)
-    masks = compare.gt_masks(gt)
     detector = MotionDetector("both", *configs)
     ids: list[int] = []
     with open_source(source) as frames:
+        masks = compare.gt_masks(gt, frames)
         for frame in frames:
             regions = detector.process(frame.grey, frame.index, frame.time_s).regions
             if frame.index < compare.WARMUP or frame.index not in masks:

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import cv2
 import numpy as np
 import pytest
 
+from motiondetect.io.video import read_mask
 from motiondetect.tools.evaluate import (
     Counts,
     EvaluateError,
@@ -13,6 +17,10 @@ from motiondetect.tools.evaluate import (
     score_box,
     score_frame,
 )
+from motiondetect.tools.ground_truth import aligned_truth, index_by_number
+
+from .cli_outputs import invoke
+from .velocity_scenes import pan_with_mover
 
 
 def test_metrics_equal_hand_computed_numbers():
@@ -100,3 +108,44 @@ def test_box_files_score_object_recall(tmp_path):
     (seq / "groundtruth_rect.txt").write_text("0,0,4\n")
     with pytest.raises(EvaluateError, match="expected 'x,y,w,h'"):
         evaluate_sequence(tmp_path / "pred", seq / "groundtruth_rect.txt")
+
+
+def test_ground_truth_finds_its_frame_by_the_files_numbers():
+    gt = [Path(f"{n:05d}.png") for n in range(12, 40, 3)]  # starts after the frames do
+    numbers = index_by_number((n, i) for i, n in enumerate(range(0, 40, 3)))  # gapped
+    aligned = aligned_truth(gt, numbers)
+    assert aligned[4] == Path("00012.png") and aligned[12] == Path("00036.png")
+    del numbers[15]  # its file was unreadable: its truth scores nothing
+    assert Path("00015.png") not in aligned_truth(gt, numbers).values()
+    # A video (no numbers), or numbers the truth does not use: GT's own offset
+    assert aligned_truth(gt, None)[0] == aligned_truth(gt, {1: 0})[0] == Path("00012.png")
+    assert aligned_truth(gt, None)[3] == Path("00015.png")
+    assert index_by_number([(3, 0), (3, 1)]) is None  # two cameras' frames: ambiguous
+    assert index_by_number([(-1, 0)]) is None  # a file without a number
+
+
+def test_a_gapped_frames_folder_is_scored_against_its_own_frames(tmp_path):
+    """Frames numbered 30, 33, ... with one file unreadable, ground truth
+    only from frame 42: the frames.jsonl numbers align them, and the scores
+    are those of each mask against its own frame's truth."""
+    seq, gt_dir = tmp_path / "seq", tmp_path / "truth" / "groundtruth"
+    seq.mkdir()
+    clip = pan_with_mover(lambda t: (30 + 6 * t, 90), frames=16, pan=2.0)
+    for t, (image, mask) in enumerate(clip):
+        number = 30 + 3 * t
+        cv2.imwrite(str(seq / f"{number:05d}.png"), image if t != 8 else image[:10])
+        if t >= 4:
+            write(gt_dir, f"gt{number:05d}.png", mask.astype(np.uint8) * 255)
+    out = tmp_path / "out"
+    assert invoke("detect", seq, "-o", out, "-q", "--masks", "--no-video").exit_code == 0
+    lines = (out / "seq" / "frames.jsonl").read_text(encoding="utf-8").splitlines()
+    records = [json.loads(line) for line in lines]
+    assert [r["number"] for r in records] == [30 + 3 * t for t in range(16) if t != 8]
+    score = evaluate_sequence(out / "seq", tmp_path / "truth", warmup=3)
+    expected = Counts()
+    for t in range(4, 16):
+        if t != 8:
+            pred = read_mask(out / "seq" / "masks" / f"{t:06d}.png")
+            expected.add(score_frame(pred, clip[t][1].astype(np.uint8) * 255))
+    assert score.counts == expected and score.counts.frames == 11
+    assert score.counts.objects_hit >= 9  # the mover found on its own frames

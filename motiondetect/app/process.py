@@ -190,7 +190,7 @@ class _FrameWriters:
             self._files = files.pop_all()
 
     def write(self, frame: SourceFrame, result: FrameResult) -> dict:
-        record = frame_record(result)
+        record = frame_record(result, frame.number)
         self.frames.append(record)
         for det in record["detections"]:
             self.detections.append(result.index, result.time_s, det)

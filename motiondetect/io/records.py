@@ -21,9 +21,15 @@ def _observer_record(result: FrameResult) -> dict:
     return {"class": -1, "name": name, "confidence": 0.0, "params": {}}
 
 
-def frame_record(result: FrameResult) -> dict:
-    record = {
-        "frame": result.index,
+def frame_record(result: FrameResult, number: int | None = None) -> dict:
+    """The frames.jsonl record of one result; ``number`` is the number in
+    the name of the frame's file (frames folders), recorded when given, so
+    that ground truth numbered as the files finds its frame
+    (:func:`motiondetect.tools.evaluate.aligned_truth`)."""
+    record = {"frame": result.index}
+    if number is not None and number >= 0:
+        record["number"] = number
+    record |= {
         "time_s": round(result.time_s, 4),
         "warm_up": result.warm_up,
         "reliable": result.reliable,

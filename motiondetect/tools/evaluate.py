@@ -16,9 +16,14 @@ folder holding that file also works). A box is not a mask and other movers
 are not boxed, so only object recall is scored there: the target is found
 when at least ``HIT_FRACTION`` of its box is flagged.
 
-GT files are sorted by the number in their names and aligned to predicted
-frames by subtracting the smallest number (UCSD starts at 1, the others at
-0), so GT number ``n`` scores predicted frame ``n - first``. A
+GT files are matched to predicted frames by the number in their names
+(:func:`aligned_truth`). Where the input was a frames folder, its
+``frames.jsonl`` records each frame file's number, and GT number ``n``
+scores the frame read from the file numbered ``n``: GT that starts after
+the first frame, frames numbered with gaps and files skipped as unreadable
+all stay aligned. Otherwise (a video, or no GT number among the files') GT
+is aligned by subtracting the smallest GT number (UCSD starts at 1, the
+others at 0), so GT number ``n`` scores predicted frame ``n - first``. A
 ``temporalROI.txt`` next to the GT folder limits the frames scored.
 Predictions are ``masks/NNNNNN.png`` (0-based frame index) as
 ``motiondetect detect --masks`` writes them.
@@ -34,15 +39,18 @@ import numpy as np
 
 from motiondetect.io.files import last_number
 from motiondetect.io.video import read_mask
+from motiondetect.tools.ground_truth import (
+    EvaluateError,
+    aligned_truth,
+    find_gt_boxes,
+    find_gt_folder,
+    read_boxes,
+    recorded_numbers,
+    temporal_roi,
+)
 
-GT_FOLDERS = ("groundtruth", "Annotations", "truth", "masks")
-GT_BOXES = "groundtruth_rect.txt"
 UNKNOWN_VALUES = (85, 170)
 HIT_FRACTION = 0.1  # an object is found when at least this share of it is flagged
-
-
-class EvaluateError(ValueError):
-    """Inputs to evaluate cannot be used; one line for the user."""
 
 
 @dataclass
@@ -99,26 +107,6 @@ class Counts:
 class SequenceScore:
     name: str
     counts: Counts = field(default_factory=Counts)
-
-
-def find_gt_folder(path: Path) -> Path:
-    if not path.is_dir():
-        raise EvaluateError(f"{path}: ground truth must be a folder of PNG masks or a box file")
-    for name in GT_FOLDERS:
-        if (path / name).is_dir():
-            return path / name
-    return path
-
-
-def _temporal_roi(gt_folder: Path) -> tuple[int, int] | None:
-    for candidate in (gt_folder / "temporalROI.txt", gt_folder.parent / "temporalROI.txt"):
-        if candidate.is_file():
-            try:
-                first, last = (int(v) for v in candidate.read_text().split()[:2])
-                return first, last
-            except ValueError:
-                return None
-    return None
 
 
 #: Cell-level scoring: cells of CELL_PX x CELL_PX input pixels.
@@ -200,37 +188,6 @@ def score_frame(
     return c
 
 
-def find_gt_boxes(path: Path) -> Path | None:
-    """The box file ``path`` is or holds, if any."""
-    if path.is_file() and path.suffix.lower() == ".txt":
-        return path
-    if path.is_dir() and (path / GT_BOXES).is_file():
-        return path / GT_BOXES
-    return None
-
-
-def read_boxes(path: Path) -> list[tuple[int, int, int, int]]:
-    """One ``(x, y, w, h)`` box per frame, input px; blank lines skipped."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise EvaluateError(f"{path}: cannot read boxes ({exc.__class__.__name__})") from None
-    boxes = []
-    for number, line in enumerate(text.splitlines(), 1):
-        if not line.strip():
-            continue
-        try:
-            x, y, w, h = (int(float(v)) for v in line.replace("\t", ",").split(","))
-        except ValueError:
-            raise EvaluateError(
-                f"{path}:{number}: expected 'x,y,w,h', got {line.strip()!r}"
-            ) from None
-        boxes.append((x, y, w, h))
-    if not boxes:
-        raise EvaluateError(f"{path}: no boxes")
-    return boxes
-
-
 def score_box(pred: np.ndarray, box: tuple[int, int, int, int]) -> Counts:
     """Tally one frame against one target box (object recall only)."""
     x, y, w, h = box
@@ -272,12 +229,10 @@ def evaluate_sequence(
     )
     if not gt_files:
         raise EvaluateError(f"{gt}: no ground-truth masks found")
-    first = last_number(gt_files[0])
-    roi = _temporal_roi(gt_dir)
+    roi = temporal_roi(gt_dir)
     preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
-    for gt_file in gt_files:
+    for index, gt_file in aligned_truth(gt_files, recorded_numbers(pred_dir)).items():
         number = last_number(gt_file)
-        index = number - first
         if index < warmup or (roi and not roi[0] <= number <= roi[1]):
             continue
         pred_file = preds.get(index)
