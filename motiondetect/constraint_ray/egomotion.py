@@ -127,9 +127,14 @@ class EgoMotion:
 
     # -- use ---------------------------------------------------------------
 
-    def __call__(self, frame_index: int, geometry: GridGeometry) -> ObserverMotion | None:
-        """The exact constraint model for the motion from frame_index-1 to frame_index."""
-        motion = self.relative.get(frame_index)
+    def __call__(
+        self, frame_index: int, geometry: GridGeometry, since: int | None = None
+    ) -> ObserverMotion | None:
+        """The exact constraint model for the motion from frame ``since``
+        (by default ``frame_index - 1``) to ``frame_index``: over a gap (a
+        frame file skipped as unreadable, a repeated frame) the steps are
+        composed (:meth:`spanning`). None where a step is unknown."""
+        motion = self.spanning(frame_index - 1 if since is None else since, frame_index)
         if motion is None:
             return None
         rotation, translation = motion
@@ -141,6 +146,20 @@ class EgoMotion:
             "min_depth": self.min_depth,
         }
         return ObserverMotion(6, params, 1.0, v_w, v_xy, bound)
+
+    def spanning(self, first: int, last: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """(R, t) taking frame ``first``'s camera coordinates to frame
+        ``last``'s (``x_last = R x_first + t``), the steps between composed;
+        None when ``last`` is not after ``first`` or a step is unknown."""
+        if last <= first:
+            return None
+        rotation, translation = np.eye(3), np.zeros(3)
+        for index in range(first + 1, last + 1):
+            step = self.relative.get(index)
+            if step is None:
+                return None
+            rotation, translation = step[0] @ rotation, step[0] @ translation + step[1]
+        return rotation, translation
 
     def flow_basis(
         self, rotation: np.ndarray, translation: np.ndarray, geometry: GridGeometry

@@ -327,6 +327,15 @@ class VelocityRayDetector:
         spread = residual_spread(distance[step:-step:step, step:-step:step])
         return distance, cfg.tolerance(fit.noise_px, spread, cfg.known_floor_px), gap
 
+    def _known(self, field: VelocityField, frame_index: int) -> ObserverMotion | None:
+        """The known ego-motion over the frames the field spans (``since`` is
+        passed only across a gap, so any two-argument callable serves)."""
+        if self.egomotion is None:
+            return None
+        if field.since is None or field.since == frame_index - 1:
+            return self.egomotion(frame_index, field.geometry)
+        return self.egomotion(frame_index, field.geometry, since=field.since)
+
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         """Detect independent motion in one frame's velocity field."""
         cfg = self.config
@@ -334,7 +343,7 @@ class VelocityRayDetector:
         if fit is None:
             fit = fit_camera(field, FitConfig(), self._epipole)
             self._epipole = fit.epipole
-        known = self.egomotion(frame_index, field.geometry) if self.egomotion else None
+        known = self._known(field, frame_index)
         if not fit.reliable and known is None:
             self._carried = None
             return DetectorOutput.empty(field.shape, camera=fit)

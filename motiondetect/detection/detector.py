@@ -119,6 +119,7 @@ class MotionDetector:
         self._picture: Picture | None = None
         self._last: FrameResult | None = None  # held for a repeated frame
         self._last_time: float | None = None  # of the last frame measured
+        self._measured_at: int | None = None  # index of the last frame measured that differed
         self._found_by: dict[int, tuple[str, ...]] = {}  # the reported tracks' detectors
 
     def reset(self) -> None:
@@ -209,6 +210,9 @@ class MotionDetector:
 
         A frame that repeats the last one (``REPEAT``) carries the last
         result, marked ``repeat`` and ``held_from``."""
+        since = self._measured_at  # the frame this one was measured from
+        if flow is not REPEAT:
+            self._measured_at = index
         if flow is REPEAT:  # no time passes in what it shows
             self._last_time = time_s
             if self._last is not None:
@@ -216,7 +220,7 @@ class MotionDetector:
         if flow is None or flow is REPEAT:
             result = FrameResult(index, time_s, [], np.zeros((GRID, GRID), bool), None, None, None)
         elif self.measure == "velocity":
-            result = self._velocity_frame(flow, index, time_s)
+            result = self._velocity_frame(flow, index, time_s, since)
         else:
             result = self._normal_frame(flow, index, time_s)
         self._last = result
@@ -231,14 +235,16 @@ class MotionDetector:
         coarse = ray.coarse if ray else None
         return FrameResult(index, time_s, regions, flagged, observer, coarse, flow, outputs)
 
-    def _velocity_frame(self, flow: VelocityField, index: int, time_s: float) -> FrameResult:
+    def _velocity_frame(
+        self, flow: VelocityField, index: int, time_s: float, since: int | None
+    ) -> FrameResult:
         if flow.picture != self._picture:  # black bars found or lit: other work pixels
             self._reset_judging()
             self._picture = flow.picture
         predicted = self.tracker.predicted_mask(flow.shape)  # where confirmed tracks should be
         fit = self._fitted(flow, predicted)
         tracked = predicted if self.tracker.config.prior else None
-        flow = flow.judged(fit, tracked, self._interval(time_s))
+        flow = flow.judged(fit, tracked, self._interval(time_s), since)
         outputs = {name: det.process(flow, index) for name, det in self.detectors.items()}
         judged = [out.camera for out in outputs.values() if out.camera is not None]
         camera = judged[0] if judged else fit

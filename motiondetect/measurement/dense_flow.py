@@ -69,6 +69,10 @@ class VelocityField:
     interval_s : float, optional
         Seconds between the two frames measured, attached with the camera
         when the frames' times are known; None: one frame step.
+    since : int, optional
+        Index of the frame the velocities were measured from (the last
+        frame measured that differed), attached with the camera; None: the
+        frame before. Known ego-motion spans the same frames.
     searched_px : float, optional
         How far DIS searched, work px/frame: the median distance of the
         velocities from the last field it started from on a steady fast pan
@@ -92,6 +96,7 @@ class VelocityField:
     forward_px: np.ndarray | None = None
     picture: Picture | None = None
     interval_s: float | None = None
+    since: int | None = None
     searched_px: float | None = None
     ahead: Any = None
 
@@ -100,19 +105,23 @@ class VelocityField:
         return self.grey.shape
 
     def judged(
-        self, camera: Any, tracked: np.ndarray | None = None, interval_s: float | None = None
+        self,
+        camera: Any,
+        tracked: np.ndarray | None = None,
+        interval_s: float | None = None,
+        since: int | None = None,
     ) -> VelocityField:
-        """This field with its observer motion (track prior, interval) attached,
-        keeping every map already computed from the velocity and the frame
-        (the cached properties, ``source_px`` and ``structure``): they
-        depend on neither."""
-        return self.replaced(camera=camera, tracked=tracked, interval_s=interval_s)
+        """This field with its observer motion (track prior, interval, first
+        frame) attached, keeping every map already computed from the
+        velocity and the frame (the cached properties, ``source_px`` and
+        ``structure``): they depend on none of them."""
+        return self.replaced(camera=camera, tracked=tracked, interval_s=interval_s, since=since)
 
     def replaced(self, **changes: Any) -> VelocityField:
         """:func:`dataclasses.replace`, keeping the maps already computed (the
         cached properties): only for ``changes`` they do not depend on, which
         are those outside the measurement (``camera``, ``tracked``,
-        ``interval_s``, ``ahead``)."""
+        ``interval_s``, ``since``, ``ahead``)."""
         out = dataclasses.replace(self, **changes)
         for name, value in self.__dict__.items():
             out.__dict__.setdefault(name, value)  # fields are set; only caches are missing
