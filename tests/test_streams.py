@@ -4,6 +4,8 @@ bad-input table, docs/robustness.md)."""
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import av
 import cv2
 import numpy as np
@@ -104,3 +106,23 @@ def test_raw_streams_and_mjpeg_are_videos_a_batch_finds(tmp_path, frames):
     still.write_bytes(buffer.tobytes())
     result = invoke("detect", still, "-o", tmp_path / "o2", "-q")
     assert result.exit_code == 1 and "still.mjpeg: a still image, not a video" in result.output
+
+
+def test_camcorder_and_action_camera_files_are_videos_a_batch_finds(tmp_path, frames):
+    """DV (a tape camcorder's stream), MPEG-2 in a camcorder's .mod, and
+    GoPro's .lrv proxy (an MP4 by another name): a batch finds each and
+    reads every frame. Before, all three were 'not videos'."""
+    folder = tmp_path / "card"
+    folder.mkdir()
+    ntsc = [cv2.resize(f, (720, 480)) for f in frames]  # the sizes DV allows
+    encode(
+        folder / "tape.dv", ntsc, "dvvideo", fmt="dv", rate=Fraction(30000, 1001), pix_fmt="yuv411p"
+    )
+    encode(folder / "MOV001.MOD", frames, "mpeg2video", fmt="vob")
+    encode(folder / "GL010001.LRV", frames, fmt="mp4")
+    jobs = discover_inputs([folder], recursive=False)
+    assert sorted(j.path.name for j in jobs) == ["GL010001.LRV", "MOV001.MOD", "tape.dv"]
+    result = invoke("detect", folder, "-o", tmp_path / "o", "-q", "--no-video")
+    assert result.exit_code == 0, result.output
+    for name in ("tape", "MOV001", "GL010001"):
+        assert len(times_of(tmp_path / "o" / name)) == N, name

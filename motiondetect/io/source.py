@@ -18,11 +18,14 @@ import numpy as np
 IMAGE_EXTENSIONS = {
     ".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pnm",
 }  # fmt: skip
-#: Video files a batch finds: containers, and the raw streams cameras and
-#: encoders leave (H.264/H.265 elementary streams, IVF, MJPEG).
+#: Video files a batch finds: containers, the names cameras give them
+#: (camcorders' DV and MPEG-2 .mod/.tod, GoPro's .lrv proxies, Insta360's
+#: .insv, both MP4), and the raw streams cameras and encoders leave
+#: (H.264/H.265 elementary streams, IVF, MJPEG).
 VIDEO_EXTENSIONS = {
-    ".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv", ".flv",
-    ".ts", ".mts", ".m2ts", ".3gp", ".ogv", ".y4m", ".mxf", ".vob", ".m2v", ".f4v", ".asf",
+    ".mp4", ".avi", ".mov", ".qt", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv", ".flv",
+    ".ts", ".mts", ".m2ts", ".3gp", ".3g2", ".ogv", ".y4m", ".mxf", ".vob", ".m2v", ".f4v",
+    ".asf", ".divx", ".nut", ".rm", ".rmvb", ".dv", ".dif", ".mod", ".tod", ".lrv", ".insv",
     ".h264", ".264", ".h265", ".265", ".hevc", ".ivf", ".mjpeg", ".mjpg",
 }  # fmt: skip
 DEFAULT_FRAMES_FPS = 30.0
