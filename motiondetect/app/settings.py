@@ -56,6 +56,7 @@ SECTIONS: dict[str, type] = {
 CONFIG_OPTIONS: dict[str, tuple[str, str]] = {
     "persistence": ("track", "persistence"),
     "focal_share": ("fit", "focal_share"),
+    "rolling_shutter": ("fit", "line_gain"),
     "flow_preset": ("dense_flow", "preset"),
     "ego_model": ("constraint_ray", "ego_model"),
     "arithmetic": ("stages", "arithmetic"),
@@ -329,8 +330,18 @@ def _build_configs(values: dict, measure: str, work_size: int | None) -> dict:
         except TypeError as exc:
             raise SettingsError(f"[{section}]: {exc}".replace("__init__() ", "")) from exc
         except ValueError as exc:
-            raise SettingsError(f"[{section}] {exc}") from exc
+            raise SettingsError(f"{_option_naming(section, str(exc))}[{section}] {exc}") from exc
     return configs
+
+
+def _option_naming(section: str, message: str) -> str:
+    """``--option: `` for a config field's error when an option sets that
+    field under another name (``--rolling-shutter`` sets ``[fit] line_gain``)."""
+    field = message.split(" ", 1)[0]
+    for option, target in CONFIG_OPTIONS.items():
+        if target == (section, field) and option != field:
+            return f"--{option.replace('_', '-')}: "
+    return ""
 
 
 def make_settings(values: dict) -> Settings:
