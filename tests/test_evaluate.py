@@ -17,7 +17,7 @@ from motiondetect.tools.evaluate import (
     score_box,
     score_frame,
 )
-from motiondetect.tools.ground_truth import aligned_truth, index_by_number
+from motiondetect.tools.ground_truth import aligned_boxes, aligned_truth, index_by_number
 
 from .cli_outputs import invoke
 from .velocity_scenes import pan_with_mover
@@ -149,3 +149,28 @@ def test_a_gapped_frames_folder_is_scored_against_its_own_frames(tmp_path):
             expected.add(score_frame(pred, clip[t][1].astype(np.uint8) * 255))
     assert score.counts == expected and score.counts.frames == 11
     assert score.counts.objects_hit >= 9  # the mover found on its own frames
+
+
+def test_box_lines_follow_the_frame_files_numbers(tmp_path):
+    """OTB's line i is the frame numbered first + i: with file 0003 missing
+    from the folder, the frame read from 0004 (index 2) is scored against
+    line 3, not line 2."""
+    assert aligned_boxes(5, {1: 0, 2: 1, 4: 2, 5: 3}) == {0: 0, 1: 1, 2: 3, 3: 4}
+    assert aligned_boxes(3, {2: 1, 3: 2}) == {1: 1, 2: 2}  # file 0001 unreadable
+    assert aligned_boxes(3, None) == {0: 0, 1: 1, 2: 2}
+    seq, pred = tmp_path / "seq", tmp_path / "pred"
+    seq.mkdir()
+    corners = [(0, 0), (4, 0), (0, 4), (4, 4), (0, 0)]  # line k boxes corner k
+    (seq / "groundtruth_rect.txt").write_text("".join(f"{x},{y},4,4\n" for x, y in corners))
+    records = []
+    for index, number in enumerate((1, 2, 4, 5)):
+        mask = np.zeros((8, 8), np.uint8)
+        x, y = corners[number - 1]
+        mask[y : y + 4, x : x + 4] = 255  # the frame's own box flagged
+        write(pred / "masks", f"{index:06d}.png", mask)
+        records.append(json.dumps({"frame": index, "number": number}))
+    (pred / "frames.jsonl").write_text("\n".join(records) + "\n")
+    score = evaluate_sequence(pred, seq, warmup=0)
+    assert (score.counts.frames, score.counts.objects_hit) == (4, 4)
+    (pred / "frames.jsonl").unlink()  # by place: frames 2 and 3 meet the wrong lines
+    assert evaluate_sequence(pred, seq, warmup=0).counts.objects_hit == 2

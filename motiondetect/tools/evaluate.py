@@ -41,6 +41,7 @@ from motiondetect.io.files import last_number
 from motiondetect.io.video import read_mask
 from motiondetect.tools.ground_truth import (
     EvaluateError,
+    aligned_boxes,
     aligned_truth,
     find_gt_boxes,
     find_gt_folder,
@@ -198,7 +199,8 @@ def score_box(pred: np.ndarray, box: tuple[int, int, int, int]) -> Counts:
 
 def _evaluate_boxes(pred_dir: Path, boxes: list, warmup: int, score: SequenceScore) -> None:
     preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
-    for index, box in enumerate(boxes):
+    for index, line in aligned_boxes(len(boxes), recorded_numbers(pred_dir)).items():
+        box = boxes[line]
         mask = read_mask(preds[index]) if index >= warmup and index in preds else None
         if mask is not None:
             score.counts.add(score_box(mask, box))

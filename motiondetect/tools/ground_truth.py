@@ -131,3 +131,21 @@ def aligned_truth(gt_files: list[Path], numbers: Mapping[int, int] | None) -> di
         return {numbers[n]: p for n, p in by_number.items() if n in numbers}
     first = min(by_number)
     return {n - first: p for n, p in by_number.items()}
+
+
+def aligned_boxes(count: int, numbers: Mapping[int, int] | None) -> dict[int, int]:
+    """{predicted frame index: the box file's line that scores it}, for
+    ``count`` lines, one per frame from the first (OTB's line ``i`` is the
+    frame numbered ``first + i``).
+
+    With ``numbers`` (:func:`recorded_numbers`), line ``k`` scores the frame
+    read from the file numbered ``first + k``, ``first`` the first file's
+    number (the first frame read's number less its index: files before it
+    that were skipped as unreadable are counted), so a file missing from the
+    numbering shifts no box; otherwise line ``k`` scores frame ``k``.
+    """
+    if not numbers:
+        return {k: k for k in range(count)}
+    first = min(numbers)
+    first -= numbers[first]
+    return {numbers[first + k]: k for k in range(count) if first + k in numbers}
