@@ -194,6 +194,17 @@ class EgoMotion:
         return v_w.astype(np.float32), v_xy.astype(np.float32)
 
 
+def known_motion(egomotion, field, frame_index: int) -> ObserverMotion | None:
+    """``egomotion``'s model over the frames ``field`` spans: from its
+    ``since`` (the frame it was measured from) to ``frame_index``.
+    ``since`` is passed only across a gap, so any callable taking
+    ``(frame_index, geometry)`` serves where frames follow one another."""
+    since = getattr(field, "since", None)
+    if since is None or since == frame_index - 1:
+        return egomotion(frame_index, field.geometry)
+    return egomotion(frame_index, field.geometry, since=since)
+
+
 def _relative_from_poses(poses: dict[int, np.ndarray], flip: np.ndarray) -> dict:
     """Relative (R, t) for each frame whose predecessor also has a pose."""
     out = {}

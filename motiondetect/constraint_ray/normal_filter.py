@@ -30,6 +30,7 @@ import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.constraint_model import constraint_model
+from motiondetect.constraint_ray.egomotion import known_motion
 from motiondetect.constraint_ray.hough import CoarseField, coarse_field
 from motiondetect.constraint_ray.observer_motion import ObserverMotion, classify
 from motiondetect.detection.base import DetectorOutput
@@ -257,7 +258,7 @@ class ConstraintRayDetector:
     def _observer(self, field: NormalFlowField, coarse: CoarseField, frame_index: int):
         cfg = self.config
         if self.egomotion is not None:
-            known = self.egomotion(frame_index, field.geometry)
+            known = known_motion(self.egomotion, field, frame_index)
             if known is not None:
                 return known
         entry, class_id, confidence = classify(

@@ -45,6 +45,7 @@ import numpy as np
 
 from motiondetect.config_checks import check_fields
 from motiondetect.constraint_ray.camera_fit import CameraFit, fit_camera
+from motiondetect.constraint_ray.egomotion import known_motion
 from motiondetect.constraint_ray.epipole import off_ray
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.observer_motion import ObserverMotion
@@ -327,15 +328,6 @@ class VelocityRayDetector:
         spread = residual_spread(distance[step:-step:step, step:-step:step])
         return distance, cfg.tolerance(fit.noise_px, spread, cfg.known_floor_px), gap
 
-    def _known(self, field: VelocityField, frame_index: int) -> ObserverMotion | None:
-        """The known ego-motion over the frames the field spans (``since`` is
-        passed only across a gap, so any two-argument callable serves)."""
-        if self.egomotion is None:
-            return None
-        if field.since is None or field.since == frame_index - 1:
-            return self.egomotion(frame_index, field.geometry)
-        return self.egomotion(frame_index, field.geometry, since=field.since)
-
     def process(self, field: VelocityField, frame_index: int = 0) -> DetectorOutput:
         """Detect independent motion in one frame's velocity field."""
         cfg = self.config
@@ -343,7 +335,7 @@ class VelocityRayDetector:
         if fit is None:
             fit = fit_camera(field, FitConfig(), self._epipole)
             self._epipole = fit.epipole
-        known = self._known(field, frame_index)
+        known = known_motion(self.egomotion, field, frame_index) if self.egomotion else None
         if not fit.reliable and known is None:
             self._carried = None
             return DetectorOutput.empty(field.shape, camera=fit)

@@ -222,7 +222,7 @@ class MotionDetector:
         elif self.measure == "velocity":
             result = self._velocity_frame(flow, index, time_s, since)
         else:
-            result = self._normal_frame(flow, index, time_s)
+            result = self._normal_frame(dataclasses.replace(flow, since=since), index, time_s)
         self._last = result
         return result
 

@@ -134,6 +134,9 @@ class NormalFlowField:
     level : (64, 64) ndarray of uint8
         Pyramid level each cell came from (0 fine, 1 coarse).
     geometry : GridGeometry
+    since : int, optional
+        Index of the frame the flow was measured from, attached when judged;
+        None: the frame before. Known ego-motion spans the same frames.
     """
 
     flow_px: np.ndarray
@@ -142,6 +145,7 @@ class NormalFlowField:
     valid: np.ndarray
     level: np.ndarray
     geometry: GridGeometry
+    since: int | None = None
 
     @cached_property
     def normal(self) -> tuple[np.ndarray, np.ndarray]:
