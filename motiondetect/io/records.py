@@ -25,7 +25,7 @@ def frame_record(result: FrameResult, number: int | None = None) -> dict:
     """The frames.jsonl record of one result; ``number`` is the number in
     the name of the frame's file (frames folders), recorded when given, so
     that ground truth numbered as the files finds its frame
-    (:func:`motiondetect.tools.evaluate.aligned_truth`)."""
+    (:func:`motiondetect.tools.ground_truth.aligned_truth`)."""
     record = {"frame": result.index}
     if number is not None and number >= 0:
         record["number"] = number

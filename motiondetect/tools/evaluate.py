@@ -14,7 +14,8 @@ Or it is a text file of boxes, one ``x,y,w,h`` line per frame from the
 first (OTB's ``groundtruth_rect.txt``, comma- or tab-separated; a sequence
 folder holding that file also works). A box is not a mask and other movers
 are not boxed, so only object recall is scored there: the target is found
-when at least ``HIT_FRACTION`` of its box is flagged.
+when at least ``HIT_FRACTION`` of its box is flagged. Line ``i`` is the
+frame numbered ``first + i`` (:func:`aligned_boxes`).
 
 GT files are matched to predicted frames by the number in their names
 (:func:`aligned_truth`). Where the input was a frames folder, its
@@ -200,10 +201,9 @@ def score_box(pred: np.ndarray, box: tuple[int, int, int, int]) -> Counts:
 def _evaluate_boxes(pred_dir: Path, boxes: list, warmup: int, score: SequenceScore) -> None:
     preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
     for index, line in aligned_boxes(len(boxes), recorded_numbers(pred_dir)).items():
-        box = boxes[line]
         mask = read_mask(preds[index]) if index >= warmup and index in preds else None
         if mask is not None:
-            score.counts.add(score_box(mask, box))
+            score.counts.add(score_box(mask, boxes[line]))
 
 
 def evaluate_sequence(

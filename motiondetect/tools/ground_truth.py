@@ -101,9 +101,9 @@ def recorded_numbers(pred_dir: Path) -> dict[int, int] | None:
     else:
         return None
     try:
-        with open(path, encoding="utf-8") as lines:
-            records = [json.loads(line) for line in lines]
-        return index_by_number((int(r.get("number", -1)), int(r["frame"])) for r in records)
+        with open(path, encoding="utf-8") as lines:  # read a line at a time: long runs
+            records = (json.loads(line) for line in lines)
+            return index_by_number((int(r.get("number", -1)), int(r["frame"])) for r in records)
     except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError, AttributeError):
         return None  # not this tool's records: aligned by the GT's own numbers
 
