@@ -20,6 +20,7 @@ from motiondetect.tools.evaluate import (
 from motiondetect.tools.ground_truth import aligned_boxes, aligned_truth, index_by_number
 
 from .cli_outputs import invoke
+from .logs import warnings_logged
 from .velocity_scenes import pan_with_mover
 
 
@@ -141,7 +142,9 @@ def test_a_gapped_frames_folder_is_scored_against_its_own_frames(tmp_path):
     lines = (out / "seq" / "frames.jsonl").read_text(encoding="utf-8").splitlines()
     records = [json.loads(line) for line in lines]
     assert [r["number"] for r in records] == [30 + 3 * t for t in range(16) if t != 8]
-    score = evaluate_sequence(out / "seq", tmp_path / "truth", warmup=3)
+    with warnings_logged() as warned:
+        score = evaluate_sequence(out / "seq", tmp_path / "truth", warmup=3)
+    assert any("start at 42 and the frame files' at 30" in m for m in warned), warned
     expected = Counts()
     for t in range(4, 16):
         if t != 8:

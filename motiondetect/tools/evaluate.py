@@ -32,6 +32,7 @@ Predictions are ``masks/NNNNNN.png`` (0-based frame index) as
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,10 +47,14 @@ from motiondetect.tools.ground_truth import (
     aligned_truth,
     find_gt_boxes,
     find_gt_folder,
+    first_file_number,
+    numbered_alike,
     read_boxes,
     recorded_numbers,
     temporal_roi,
 )
+
+log = logging.getLogger(__name__)
 
 UNKNOWN_VALUES = (85, 170)
 HIT_FRACTION = 0.1  # an object is found when at least this share of it is flagged
@@ -233,7 +238,16 @@ def evaluate_sequence(
         raise EvaluateError(f"{gt}: no ground-truth masks found")
     roi = temporal_roi(gt_dir)
     preds = {last_number(p): p for p in pred_dir.glob("*.png") if last_number(p) is not None}
-    for index, gt_file in aligned_truth(gt_files, recorded_numbers(pred_dir)).items():
+    numbers = recorded_numbers(pred_dir)
+    aligned = aligned_truth(gt_files, numbers)
+    first_gt = last_number(gt_files[0])
+    if numbered_alike(gt_files, numbers) and first_gt != first_file_number(numbers):
+        log.warning(
+            "%s: the truth's numbers start at %d and the frame files' at %d; each truth file "
+            "is scored against the frame whose file has its number", gt, first_gt,
+            first_file_number(numbers),
+        )  # fmt: skip
+    for index, gt_file in aligned.items():
         number = last_number(gt_file)
         if index < warmup or (roi and not roi[0] <= number <= roi[1]):
             continue

@@ -127,10 +127,16 @@ def aligned_truth(gt_files: list[Path], numbers: Mapping[int, int] | None) -> di
         smallest GT number.
     """
     by_number = {last_number(p): p for p in gt_files}
-    if numbers and not by_number.keys().isdisjoint(numbers):
+    if numbered_alike(gt_files, numbers):
         return {numbers[n]: p for n, p in by_number.items() if n in numbers}
     first = min(by_number)
     return {n - first: p for n, p in by_number.items()}
+
+
+def numbered_alike(gt_files: list[Path], numbers: Mapping[int, int] | None) -> bool:
+    """Whether :func:`aligned_truth` matches ``gt_files`` by the frame files'
+    ``numbers``: there are numbers and some truth file carries one."""
+    return bool(numbers) and any(last_number(p) in numbers for p in gt_files)
 
 
 def aligned_boxes(count: int, numbers: Mapping[int, int] | None) -> dict[int, int]:
@@ -146,6 +152,12 @@ def aligned_boxes(count: int, numbers: Mapping[int, int] | None) -> dict[int, in
     """
     if not numbers:
         return {k: k for k in range(count)}
-    first = min(numbers)
-    first -= numbers[first]
+    first = first_file_number(numbers)
     return {numbers[first + k]: k for k in range(count) if first + k in numbers}
+
+
+def first_file_number(numbers: Mapping[int, int]) -> int:
+    """The number of an input's first frame file: the first frame read's
+    number less its index (files before it skipped as unreadable counted)."""
+    first = min(numbers)
+    return first - numbers[first]
