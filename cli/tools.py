@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 import click
-from motiondetect_cli.common import _fail, _guard
+from motiondetect_cli.common import _fail, _guard, _setup_logging
 
 # ----------------------------------------------------------------------------
 # info
@@ -202,6 +202,7 @@ def evaluate(pred, gt, warmup, output) -> None:
     from motiondetect.tools.evaluate import EvaluateError, format_table, table_rows
     from motiondetect.tools.evaluate import evaluate as run_evaluate
 
+    _setup_logging(verbose=False, quiet=False)  # the alignment's warning
     try:
         rows = table_rows(run_evaluate(pred, gt, warmup=warmup))
     except EvaluateError as exc:
