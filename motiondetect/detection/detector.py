@@ -62,7 +62,11 @@ class MotionDetector:
         Any of the detectors', the stages' (``StageConfig``), the dense
         flow's, the fit's and the tracker's; each replaces its defaults.
     egomotion : callable, optional
-        Known camera motion, ``egomotion(frame_index, geometry)``.
+        Known camera motion, ``egomotion(frame_index, geometry)`` for the
+        step from the frame before; across a gap (a frame not given, or a
+        repeat) it is called with ``since=`` the frame measured from
+        (:class:`~motiondetect.constraint_ray.egomotion.EgoMotion` composes
+        the steps).
     persistence : int, optional
         Frames an object (or, on the normal path, a region) must persist;
         replaces the ``TrackConfig``'s.
