@@ -28,13 +28,14 @@ def info(inputs, as_json) -> None:
         try:
             with open_source(path) as source:
                 meta = source.info.to_json()
+                numbering = _numbering(getattr(source, "frame_numbers", None))
         except VideoError as exc:
             click.echo(f"error: {exc}", err=True)
             failed += 1
             continue
         skip = auto_frame_skip(meta["fps"])  # detect's --frame-skip auto
         if as_json:
-            click.echo(json.dumps(meta))
+            click.echo(json.dumps(meta | ({"numbering": numbering} if numbering else {})))
         else:
             click.echo(
                 f"{path}: {meta['kind']}, {meta['width']}x{meta['height']}, "
@@ -43,9 +44,25 @@ def info(inputs, as_json) -> None:
                 + f", {meta['frame_count']} frames, "
                 f"{meta['duration_s']:.2f} s, codec {meta['codec']}"
                 + (f", rotation {meta['rotation_deg']} deg" if meta["rotation_deg"] else "")
+                + (
+                    f", files numbered {numbering['first']}-{numbering['last']}"
+                    + (f" with {numbering['gaps']} gaps" if numbering["gaps"] else "")
+                    if numbering
+                    else ""
+                )
                 + (f"; detect judges one frame in {skip + 1}" if skip else "")
             )
     sys.exit(1 if failed else 0)
+
+
+def _numbering(numbers: list[int] | None) -> dict | None:
+    """A frames folder's file numbers: first, last and the gaps between
+    (the frames are then timed by their numbers, and ground truth matched
+    by them); None for a video or files without numbers."""
+    if not numbers or min(numbers) < 0:
+        return None
+    gaps = sum(b - a > 1 for a, b in zip(numbers, numbers[1:]))
+    return {"first": numbers[0], "last": numbers[-1], "gaps": gaps}
 
 
 # ----------------------------------------------------------------------------

@@ -137,6 +137,13 @@ def test_info_marks_an_assumed_frame_rate(tmp_path):
         cv2.imwrite(str(folder / f"{i}.png"), np.full((80, 80), 40 * i, np.uint8))
     assert "(assumed)" in run("info", folder).stdout
     assert "(assumed)" not in run("info", SAMPLE).stdout
+    assert "files numbered 0-2" in run("info", folder).stdout
+    (folder / "1.png").rename(folder / "7.png")  # a sub-sampled sequence: 0, 2, 7
+    assert "3 frames, 0.27 s, " in run("info", folder).stdout  # timed by number: 8 steps
+    assert "files numbered 0-7 with 2 gaps" in run("info", folder).stdout
+    meta = json.loads(run("info", folder, "--json").stdout)
+    assert meta["numbering"] == {"first": 0, "last": 7, "gaps": 2}
+    assert "numbering" not in json.loads(run("info", SAMPLE, "--json").stdout)
 
 
 def test_evaluate_help_explains_every_column():

@@ -125,9 +125,11 @@ class FramesFolderSource(FrameSource):
         w, h = _size(first)
         check_size(w, h, str(path))
         self._files, self._numbers, self._first, self._first_at = files, numbers, first, first_at
+        span = numbers[-1] - numbers[0] + 1 if self._timed_by_number else 0
         self.info = VideoInfo(
-            str(path), "frames", w, h, fps, len(files), "image-sequence", 0, fps_source
-        )
+            str(path), "frames", w, h, fps, len(files), "image-sequence", 0, fps_source,
+            span_frames=span,
+        )  # fmt: skip
         self.partial = False
 
     def _first_readable(self, files: list[Path]) -> tuple[np.ndarray | av.VideoFrame | None, int]:

@@ -57,13 +57,16 @@ class VideoInfo:
     rotation_deg: int = 0
     fps_source: str = "container"
     interlaced: bool = False
+    span_frames: int = 0  # frame steps the times span (a folder timed by number); 0: frames
 
     @property
     def duration_s(self) -> float:
-        return self.frame_count / self.fps if self.fps > 0 else 0.0
+        frames = self.span_frames or self.frame_count
+        return frames / self.fps if self.fps > 0 else 0.0
 
     def to_json(self) -> dict:
         out = asdict(self)
+        del out["span_frames"]  # what it changes is the duration
         out["duration_s"] = round(self.duration_s, 4)
         return out
 
