@@ -28,7 +28,7 @@ def info(inputs, as_json) -> None:
         try:
             with open_source(path) as source:
                 meta = source.info.to_json()
-                numbering = _numbering(getattr(source, "frame_numbers", None))
+                numbering = getattr(source, "numbering", None)  # frames folders
         except VideoError as exc:
             click.echo(f"error: {exc}", err=True)
             failed += 1
@@ -53,16 +53,6 @@ def info(inputs, as_json) -> None:
                 + (f"; detect judges one frame in {skip + 1}" if skip else "")
             )
     sys.exit(1 if failed else 0)
-
-
-def _numbering(numbers: list[int] | None) -> dict | None:
-    """A frames folder's file numbers: first, last and the gaps between
-    (the frames are then timed by their numbers, and ground truth matched
-    by them); None for a video or files without numbers."""
-    if not numbers or min(numbers) < 0:
-        return None
-    gaps = sum(b - a > 1 for a, b in zip(numbers, numbers[1:]))
-    return {"first": numbers[0], "last": numbers[-1], "gaps": gaps}
 
 
 # ----------------------------------------------------------------------------

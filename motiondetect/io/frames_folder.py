@@ -106,6 +106,13 @@ class FramesFolderSource(FrameSource):
         gaps = sum(step > 1 for step in steps)
         rising = bool(numbers) and numbers[0] >= 0 and all(step > 0 for step in steps)
         self._timed_by_number = bool(gaps) and rising
+        #: The files' numbering, first, last and gaps (the frames are timed by
+        #: it, and ground truth matched by it); None where files lack numbers.
+        self.numbering = (
+            {"first": numbers[0], "last": numbers[-1], "gaps": gaps}
+            if numbers and min(numbers) >= 0
+            else None
+        )
         if gaps:
             timed = "timed by their numbers" if rising else "taken in order"
             log.warning("%s: frame numbering has %d gaps; frames are %s", path, gaps, timed)
