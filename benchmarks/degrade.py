@@ -39,6 +39,13 @@ region is a false alarm) are written into ``OUT`` with
   phone's CMOS sensor is about 0.5-0.9; 0, a global shutter, displaces each
   frame whole); each row shows the view at its own read time, so the picture
   wobbles (the "jello" effect) and the masks with it;
+* ``--mirror``: each frame and mask mirrored left-right, the same footage
+  as a camera turning and walking the other way would record it (nothing
+  else changed: a detector built on principles finds the same, within its
+  random draws);
+* ``--reverse``: the clip played backwards, its last frame first (frames and
+  masks keep their names, in the order they had): every motion reversed, a
+  rigid world still rigid;
 
 as near-lossless JPEGs under the same names, with the ground truth linked,
 not copied. The frames never leave this machine::
@@ -187,13 +194,20 @@ def degraded(
     return caption(out, t) if overlay else out
 
 
+def _ordered(files: list[Path], args: argparse.Namespace) -> list[Path]:
+    """``files`` in the order they are played: backwards with ``--reverse``."""
+    return files[::-1] if args.reverse else files
+
+
 def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: int) -> None:
     """Write each of ``frames`` degraded into ``target``, under its own name."""
     rng = np.random.default_rng(seed)
     path = vibration_path(np.random.default_rng(1000 + seed), args.vibration)
     target.mkdir(parents=True, exist_ok=True)
-    for t, frame in enumerate(frames):
+    for t, (frame, name) in enumerate(zip(_ordered(frames, args), frames, strict=True)):
         image = cv2.imread(str(frame))
+        if args.mirror:
+            image = np.ascontiguousarray(image[:, ::-1])
         if args.vibration > 0:
             image = wobbled(image, t, path, args.readout)
         if t == 0:
@@ -206,7 +220,7 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
             args.distortion, args.overlay, args.letterbox, args.pillarbox, args.blurred_sides,
             smear,
         )  # fmt: skip
-        cv2.imwrite(str(target / frame.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
+        cv2.imwrite(str(target / name.name), image, [cv2.IMWRITE_JPEG_QUALITY, 99])
 
 
 def _truth(source: Path, target: Path, args: argparse.Namespace, seed: int) -> None:
@@ -216,21 +230,24 @@ def _truth(source: Path, target: Path, args: argparse.Namespace, seed: int) -> N
         return
     target.parent.mkdir(parents=True, exist_ok=True)
     changed = args.distortion != 0 or max(args.letterbox, args.pillarbox, args.hood) > 0
-    changed = changed or args.vibration > 0
+    changed = changed or args.vibration > 0 or args.mirror or args.reverse
     if not changed or not source.is_dir():
         target.symlink_to(source.resolve())
         return
     target.mkdir()
     path = vibration_path(np.random.default_rng(1000 + seed), args.vibration)
-    for t, mask in enumerate(numbered(source, ".png")):
+    masks = numbered(source, ".png")
+    for t, (mask, name) in enumerate(zip(_ordered(masks, args), masks, strict=True)):
         image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
+        if args.mirror:
+            image = np.ascontiguousarray(image[:, ::-1])
         if args.vibration > 0:
             image = wobbled(image, t, path, args.readout, nearest=True)
         if args.hood > 0:
             image = image.copy()
             image[hood_mask(image.shape[1], image.shape[0], args.hood)] = 0
         image = _lens(image, args.distortion, nearest=True)
-        cv2.imwrite(str(target / mask.name), bars(image, args.letterbox, args.pillarbox))
+        cv2.imwrite(str(target / name.name), bars(image, args.letterbox, args.pillarbox))
 
 
 def main() -> None:
@@ -247,6 +264,8 @@ def main() -> None:
     parser.add_argument("--shake", type=float, default=0.0, help="share of frames smeared, 0-1")
     parser.add_argument("--vibration", type=float, default=0.0, help="share of the width")
     parser.add_argument("--readout", type=float, default=0.0, help="share of the frame period")
+    parser.add_argument("--mirror", action="store_true", help="mirror left-right")
+    parser.add_argument("--reverse", action="store_true", help="play backwards")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:
         parser.error("--noise must be >= 0, --exposure in [0, 1), --distortion in [-0.5, 0]")

@@ -24,6 +24,7 @@ from motiondetect.constraint_ray.plane import (
     fit_homography,
     mixture_log_likelihood,
     plane_error,
+    samples,
 )
 from motiondetect.constraint_ray.velocity_filter import gap_to_segment
 from motiondetect.detection.detector import MotionDetector
@@ -185,6 +186,36 @@ def test_a_cut_is_unreliable_and_flags_nothing():
     # Known ego-motion can still judge such a frame: the frame-edge band stays.
     fit = result.camera
     assert fit.edge_band_px == pytest.approx(FitConfig().edge_px + fit.median_speed_px)
+
+
+@pytest.mark.parametrize("dx", [60, 100])
+def test_the_strip_a_fast_pan_brings_into_view_is_no_cut(dx):
+    """The cut test compares what both frames show. A pan of ``dx`` work px
+    a frame, exactly undone by the plane, differs by nothing there; the
+    strip entering the view (a fifth to a third of the frame) has no
+    previous picture and is left out. A new shot still differs everywhere."""
+    from motiondetect.constraint_ray.ahead import plane_maps
+    from motiondetect.measurement.dense_flow import VelocityField, pixel_grid
+    from motiondetect.measurement.normal_flow import GridGeometry
+
+    def grey(image):
+        return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+    velocity = np.zeros((H, W, 2), np.float32)
+    velocity[..., 0] = -dx
+    homography = np.array([[1.0, 0, dx], [0, 1, 0], [0, 0, 1]])  # current to previous pixels
+    other = grey(cv2.resize(cv2.cvtColor(data.chelsea(), cv2.COLOR_RGB2BGR), (W, H)))
+    config = FitConfig()
+    cuts = []
+    for now in (grey(background(dx)), other):
+        field = VelocityField(
+            velocity, now, grey(background(0.0)), GridGeometry((W, H), (W, H)), pixel_grid(W, H)
+        )
+        inliers = np.ones(len(samples(field, config.sample_step_px)[0]), bool)
+        maps = plane_maps(field, homography, inliers, config)
+        assert maps.difference[8:-8, -dx:-8].mean() > 50  # the entering strip
+        cuts.append(maps.cut)
+    assert cuts[0] == 0.0 and cuts[1] > config.cut_grey
 
 
 def test_a_still_camera_is_static_however_noisy_its_flow():

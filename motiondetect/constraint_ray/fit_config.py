@@ -42,7 +42,9 @@ class FitConfig:
         :data:`~motiondetect.measurement.flow_config.DIS_REACH_PX`.
     cut_grey : float
         Mean absolute grey difference between the frame and the previous
-        one warped by the fit above which the frame is taken as a cut.
+        one warped by the fit, over the pixels both frames show (not the
+        strip a pan brings into view), above which the frame is taken as a
+        cut.
     parallax_sigmas : float
         Residuals above this many noise sigmas count as parallax evidence.
     min_parallax_blocks : int

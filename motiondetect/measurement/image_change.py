@@ -61,21 +61,40 @@ def matched_exposure(older: np.ndarray, current: np.ndarray) -> np.ndarray:
     return older * np.float32(gain)
 
 
+def _warped_back(
+    image: np.ndarray, field: VelocityField, homography: np.ndarray, offsets: np.ndarray | None
+) -> np.ndarray:
+    """``image`` (previous-frame pixels) at the current frame's pixels, each
+    taken from where the plane (plus ``offsets``) says it was; 0 where that
+    lies outside the previous frame."""
+    h, w = field.shape
+    if offsets is not None:
+        grid = field.pixel_grid.reshape(-1, 1, 2)
+        previous = cv2.perspectiveTransform(grid, homography).reshape(h, w, 2) - offsets
+        return cv2.remap(image, previous, None, cv2.INTER_LINEAR)
+    return cv2.warpPerspective(image, homography, (w, h), flags=cv2.WARP_INVERSE_MAP)
+
+
 def plane_difference(
     field: VelocityField, homography: np.ndarray, offsets: np.ndarray | None = None
 ) -> np.ndarray:
     """``|grey - previous grey warped by the plane|``, (h, w) uint8 grey levels;
     ``offsets`` (h, w, 2) work px/frame, the velocity a rolling shutter adds
-    to the plane's (:mod:`~motiondetect.constraint_ray.rolling_shutter`)."""
-    h, w = field.shape
-    if offsets is not None:
-        grid = field.pixel_grid.reshape(-1, 1, 2)
-        previous = cv2.perspectiveTransform(grid, homography).reshape(h, w, 2) - offsets
-        warped = cv2.remap(field.previous_grey, previous, None, cv2.INTER_LINEAR)
-        return cv2.absdiff(warped, field.grey)
-    flags = cv2.WARP_INVERSE_MAP
-    warped = cv2.warpPerspective(field.previous_grey, homography, (w, h), flags=flags)
-    return cv2.absdiff(warped, field.grey)
+    to the plane's (:mod:`~motiondetect.constraint_ray.rolling_shutter`).
+    Where the view has just entered (:func:`seen_before` false) the previous
+    frame has nothing to give, and the difference is the grey level itself."""
+    return cv2.absdiff(_warped_back(field.previous_grey, field, homography, offsets), field.grey)
+
+
+def seen_before(
+    field: VelocityField, homography: np.ndarray, offsets: np.ndarray | None = None
+) -> np.ndarray:
+    """(h, w) bool: the current pixels that the plane (plus ``offsets``, as
+    :func:`plane_difference`) takes from inside the previous frame, so that
+    their plane difference compares two pictures of the same place; the rest
+    entered the view with this frame (a fast pan's leading edge)."""
+    inside = np.full(field.previous_grey.shape, 255, np.uint8)
+    return _warped_back(inside, field, homography, offsets) == 255
 
 
 def chained_difference(
