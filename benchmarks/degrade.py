@@ -43,6 +43,8 @@ region is a false alarm) are written into ``OUT`` with
   as a camera turning and walking the other way would record it (nothing
   else changed: a detector built on principles finds the same, within its
   random draws);
+* ``--rotate``: each frame and mask turned a quarter clockwise, the same
+  footage as an upright (portrait) phone clip;
 * ``--reverse``: the clip played backwards, its last frame first (frames and
   masks keep their names, in the order they had): every motion reversed, a
   rigid world still rigid;
@@ -194,6 +196,16 @@ def degraded(
     return caption(out, t) if overlay else out
 
 
+def _turned(image: np.ndarray, args: argparse.Namespace) -> np.ndarray:
+    """``image`` mirrored left-right (``--mirror``) and turned a quarter
+    clockwise (``--rotate``), as asked."""
+    if args.mirror:
+        image = image[:, ::-1]
+    if args.rotate:
+        image = cv2.rotate(np.ascontiguousarray(image), cv2.ROTATE_90_CLOCKWISE)
+    return np.ascontiguousarray(image)
+
+
 def _ordered(files: list[Path], args: argparse.Namespace) -> list[Path]:
     """``files`` in the order they are played: backwards with ``--reverse``."""
     return files[::-1] if args.reverse else files
@@ -206,8 +218,7 @@ def degrade(frames: list[Path], target: Path, args: argparse.Namespace, seed: in
     target.mkdir(parents=True, exist_ok=True)
     for t, (frame, name) in enumerate(zip(_ordered(frames, args), frames, strict=True)):
         image = cv2.imread(str(frame))
-        if args.mirror:
-            image = np.ascontiguousarray(image[:, ::-1])
+        image = _turned(image, args)
         if args.vibration > 0:
             image = wobbled(image, t, path, args.readout)
         if t == 0:
@@ -230,7 +241,7 @@ def _truth(source: Path, target: Path, args: argparse.Namespace, seed: int) -> N
         return
     target.parent.mkdir(parents=True, exist_ok=True)
     changed = args.distortion != 0 or max(args.letterbox, args.pillarbox, args.hood) > 0
-    changed = changed or args.vibration > 0 or args.mirror or args.reverse
+    changed = changed or args.vibration > 0 or args.mirror or args.rotate or args.reverse
     if not changed or not source.is_dir():
         target.symlink_to(source.resolve())
         return
@@ -239,8 +250,7 @@ def _truth(source: Path, target: Path, args: argparse.Namespace, seed: int) -> N
     masks = numbered(source, ".png")
     for t, (mask, name) in enumerate(zip(_ordered(masks, args), masks, strict=True)):
         image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
-        if args.mirror:
-            image = np.ascontiguousarray(image[:, ::-1])
+        image = _turned(image, args)
         if args.vibration > 0:
             image = wobbled(image, t, path, args.readout, nearest=True)
         if args.hood > 0:
@@ -265,6 +275,7 @@ def main() -> None:
     parser.add_argument("--vibration", type=float, default=0.0, help="share of the width")
     parser.add_argument("--readout", type=float, default=0.0, help="share of the frame period")
     parser.add_argument("--mirror", action="store_true", help="mirror left-right")
+    parser.add_argument("--rotate", action="store_true", help="turn a quarter clockwise")
     parser.add_argument("--reverse", action="store_true", help="play backwards")
     args = parser.parse_args()
     if args.noise < 0 or not 0 <= args.exposure < 1 or not -0.5 <= args.distortion <= 0:

@@ -23,6 +23,14 @@ Their speed is measured by ``benchmarks/throughput.py`` and ``benchmarks/stages.
 DIS's median error by distance from the frame's border, in DIS patches
 (``VelocityField.patch_px``), every pixel counted: the source of
 ``VelocityRayConfig.edge_error_ratio``.
+
+    python benchmarks/velocity_accuracy.py --edges
+
+DIS's mean error within one patch of each of the four edges, and inside,
+in a square, a landscape and an upright (portrait) frame; then in the square
+frame with the photo turned by quarters under the fastest rotation and zoom:
+whether an edge worse than the others is DIS's (it stays put as the photo
+turns) or the picture's (it turns with the photo).
 """
 
 from __future__ import annotations
@@ -60,15 +68,22 @@ def camera(kind: str, amount: float, t: int) -> np.ndarray:
     return offset @ move
 
 
-def frame(kind: str, amount: float, t: int) -> np.ndarray:
+def frame(
+    kind: str, amount: float, t: int, size: tuple[int, int] = (SIZE, SIZE), turns: int = 0
+) -> np.ndarray:
+    """Frame ``t``, ``size`` (width, height) px, of the photo turned
+    ``turns`` quarters anticlockwise."""
+    photo = np.ascontiguousarray(np.rot90(PHOTO, turns))
     return cv2.warpPerspective(
-        PHOTO, camera(kind, amount, t), (SIZE, SIZE), flags=cv2.WARP_INVERSE_MAP | cv2.INTER_CUBIC
+        photo, camera(kind, amount, t), size, flags=cv2.WARP_INVERSE_MAP | cv2.INTER_CUBIC
     )
 
 
-def true_velocity(kind: str, amount: float, t: int) -> np.ndarray:
-    """(SIZE, SIZE, 2) velocity at frame t's pixels: x - (where x was in frame t-1)."""
-    yy, xx = np.mgrid[0:SIZE, 0:SIZE].astype(np.float64)
+def true_velocity(
+    kind: str, amount: float, t: int, size: tuple[int, int] = (SIZE, SIZE)
+) -> np.ndarray:
+    """(height, width, 2) velocity at frame t's pixels: x - (where x was in frame t-1)."""
+    yy, xx = np.mgrid[0 : size[1], 0 : size[0]].astype(np.float64)
     pts = np.stack([xx, yy, np.ones_like(xx)], -1) @ camera(kind, amount, t).T
     before = pts @ np.linalg.inv(camera(kind, amount, t - 1)).T
     before = before[..., :2] / before[..., 2:]
@@ -160,10 +175,48 @@ def border_table() -> None:
         print(f"| {label} | {cells} | {ratio:.1f} |", flush=True)
 
 
+#: Frames of the edge table: a square, a landscape and an upright frame.
+EDGE_SIZES = ((320, 320), (320, 180), (180, 320))
+EDGES = ("top", "bottom", "left", "right")
+
+
+def edge_errors(
+    kind: str, amount: float, size: tuple[int, int], turns: int = 0, frames: int = 4
+) -> list[float]:
+    """DIS's mean error within one patch of each of :data:`EDGES`, and
+    inside, px/frame, in a frame of ``size`` (width, height) of the photo
+    turned ``turns`` quarters."""
+    flow = DenseFlow(DenseFlowConfig(work_size=max(size)))
+    for t in range(frames):
+        field = flow.process(frame(kind, amount, t, size, turns))
+    err = np.hypot(*(field.velocity_px - true_velocity(kind, amount, frames - 1, size)).T).T
+    b = field.patch_px
+    bands = (err[:b], err[-b:], err[:, :b], err[:, -b:], err[b:-b, b:-b])
+    return [float(band.mean()) for band in bands]
+
+
+def edge_table() -> None:
+    print("| frame | photo turned | motion | " + " | ".join(EDGES) + " | inside |")
+    print("|---|---|---|" + "---|" * (len(EDGES) + 1))
+    rows = [
+        (size, 0, motion)
+        for size in EDGE_SIZES
+        for motion in MOTIONS
+        if motion[0] != "translation" or 0.3 <= motion[1] <= 15.5
+    ]
+    rows += [((SIZE, SIZE), turns, motion) for turns in (1, 2, 3) for motion in MOTIONS[-5::4]]
+    for size, turns, (kind, amount, label) in rows:
+        cells = " | ".join(f"{e:.3f}" for e in edge_errors(kind, amount, size, turns))
+        print(f"| {size[0]}x{size[1]} | {90 * turns} deg | {label} | {cells} |", flush=True)
+
+
 def main() -> None:
     cv2.setNumThreads(1)
     if "--border" in sys.argv[1:]:
         border_table()
+        return
+    if "--edges" in sys.argv[1:]:
+        edge_table()
         return
     header = [
         "| motion | median speed (px/frame) | median error | 90th pct error "

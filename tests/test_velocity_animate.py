@@ -145,3 +145,32 @@ def test_an_animate_label_grows_over_what_moves_with_it_not_over_all_parallax():
     grown = coherent_growth(seeds, residual, speed, tolerance, relative=0.5)
     assert grown[10:50, 10:60].all() and grown.sum() == 40 * 50
     assert hysteresis(speed, tolerance, 1.0, seeds=seeds)[10:50, 60:110].all()
+
+
+@pytest.mark.parametrize("pan", [6.0, 16.0])
+def test_an_animate_label_never_grows_over_what_just_entered_the_view(pan):
+    """A camera panning right brings a strip of new content in at the right
+    edge each frame; DIS extrapolates its flow from the neighbours', here a
+    reversing mover's. The animate label grows over the mover, never over
+    that strip (``CameraFit.seen``): growing over it too flagged 5 400 and
+    24 100 pixels off the mover over these clips."""
+
+    def path(t: int) -> tuple[float, float]:
+        x = 240.0
+        for i in range(t):
+            x += 8.0 if (i // 4) % 2 == 0 else -8.0
+        return x, 90.0
+
+    md = MotionDetector("animate", persistence=1)
+    entered = hits = judged = 0
+    for t, (image, mask) in enumerate(pan_with_mover(path, pan=pan)):
+        result = md.process(image, t, t / 30)
+        out = (result.outputs or {}).get("velocity-animate")
+        if out is None or out.mask is None or result.camera.seen is None:
+            continue
+        judged += 1
+        on_mover = cv2.resize(mask.view(np.uint8), out.mask.shape[::-1]) > 0
+        entered += int((out.mask & ~result.camera.seen & ~on_mover).sum())
+        hits += bool((out.mask & on_mover).any())
+    assert judged >= 20 and entered == 0
+    assert hits >= 0.7 * judged  # the mover is still found

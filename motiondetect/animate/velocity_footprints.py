@@ -361,10 +361,12 @@ class VelocityAnimateDetector:
         if cfg.evidence_sigmas > 0 and fit.plane_difference is not None:
             violation &= fit.image_changed(cfg.evidence_sigmas, cfg.evidence_box)
         animate = self._remember(violation, field)
+        # What entered the view has extrapolated flow: nothing to grow over.
+        grown = speed if fit.seen is None else np.where(fit.seen, speed, 0)
         if cfg.coherence > 0:
-            mask = coherent_growth(animate, fit.residual_px, speed, tolerance, cfg.coherence)
+            mask = coherent_growth(animate, fit.residual_px, grown, tolerance, cfg.coherence)
         else:
-            mask = hysteresis(speed, tolerance, 1.0, seeds=animate)
+            mask = hysteresis(grown, tolerance, 1.0, seeds=animate)
         strength = np.where(mask, speed / (speed + tolerance), 0.0).astype(np.float32)
         return DetectorOutput.from_mask(
             mask, strength, camera=fit, extra={"violations": int(violation.sum())}

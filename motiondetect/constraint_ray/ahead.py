@@ -58,6 +58,10 @@ class PlaneMaps:
     cut : float
         The mean difference inside an 8-px border over the pixels the
         previous frame saw too (a cut's test), grey levels.
+    seen : (h, w) ndarray of bool or None
+        :func:`~motiondetect.measurement.image_change.seen_before`: the
+        pixels the plane takes from inside the previous frame; the rest
+        entered the view with this frame, and their flow is extrapolated.
 
     All None (share: the inliers' share) without a plane.
     """
@@ -69,6 +73,7 @@ class PlaneMaps:
     energy: float
     share: float
     cut: float
+    seen: np.ndarray | None
 
 
 def plane_maps(
@@ -83,7 +88,7 @@ def plane_maps(
     rolling shutter's offsets."""
     if homography is None:
         share = float(inliers.mean()) if len(inliers) else 0.0
-        return PlaneMaps(None, None, None, None, 0.0, share, 0.0)
+        return PlaneMaps(None, None, None, None, 0.0, share, 0.0, None)
     offsets = None if lines is None else lines.field(field.shape)
     difference = plane_difference(field, homography, offsets)
     change_noise = difference_noise(difference)
@@ -94,20 +99,21 @@ def plane_maps(
     sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
     energy = (config.aperture_noise * change_noise) ** 2
     share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
-    cut = _seen_difference(field, homography, offsets, difference)
-    return PlaneMaps(difference, change_noise, residual, sampled, energy, share, cut)
+    seen = seen_before(field, homography, offsets)
+    cut = _seen_difference(seen, difference)
+    return PlaneMaps(difference, change_noise, residual, sampled, energy, share, cut, seen)
 
 
-def _seen_difference(field, homography, offsets, difference) -> float:
-    """The mean of ``difference`` inside an 8-px border over the pixels seen
-    in the previous frame too (:func:`seen_before`), grey levels: a cut's
-    test. The strip a fast pan brings into view is left out: it is new, not
-    changed, and at 60 px a frame it is a fifth of a 320-px frame. 255 when
-    the plane takes no pixel from the previous frame."""
-    seen = seen_before(field, homography, offsets)[8:-8, 8:-8]
-    if not seen.any():
+def _seen_difference(seen: np.ndarray, difference: np.ndarray) -> float:
+    """The mean of ``difference`` inside an 8-px border over the pixels
+    ``seen`` in the previous frame too (:func:`seen_before`), grey levels: a
+    cut's test. The strip a fast pan brings into view is left out: it is
+    new, not changed, and at 60 px a frame it is a fifth of a 320-px frame.
+    255 when the plane takes no pixel from the previous frame."""
+    inner = seen[8:-8, 8:-8]
+    if not inner.any():
         return 255.0
-    return float(cv2.mean(difference[8:-8, 8:-8], mask=seen.view(np.uint8))[0])
+    return float(cv2.mean(difference[8:-8, 8:-8], mask=inner.view(np.uint8))[0])
 
 
 def wobble_removed(

@@ -104,6 +104,11 @@ class CameraFit:
         The plane's residual at the samples before a rolling shutter's
         wobble is taken out: the next frame's fit reads it
         (:func:`~.ahead.wobble_removed`).
+    seen : (h, w) ndarray of bool or None
+        The pixels the plane takes from inside the previous frame
+        (:func:`~motiondetect.measurement.image_change.seen_before`); the
+        rest entered the view with this frame, and DIS extrapolates their
+        flow from their neighbours'.
 
     Derived maps that several detectors read (:meth:`image_changed`,
     :meth:`residual_length`) are computed once per fit and kept.
@@ -126,6 +131,7 @@ class CameraFit:
     voted: np.ndarray | None = None
     voted_inliers: np.ndarray | None = None
     plane_sampled: np.ndarray | None = None
+    seen: np.ndarray | None = None
     _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def difference_sigma(self) -> float:
@@ -311,7 +317,7 @@ def fit_camera(
     return CameraFit(
         homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
         maps.change_noise, sharp, maps.energy, float(np.median(vector_length(velocity - sampled))),
-        voted[0], voted[1], plain,
+        voted[0], voted[1], plain, maps.seen,
     )  # fmt: skip
 
 
