@@ -37,7 +37,7 @@ def test_measuring_ahead_on_a_second_thread_changes_no_result(monkeypatch, measu
         return prepare(flow, stop)
 
     def slow_judge(*args):  # the judging half the slower: the measuring thread prepares
-        time.sleep(0.02)
+        time.sleep(0.05)  # 0.02 s let a loaded machine's judge catch up (14 of 16 prepared)
         return judge(*args)
 
     monkeypatch.setattr(ahead, "measure_frame", measure_and_note)

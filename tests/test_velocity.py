@@ -218,6 +218,38 @@ def test_the_strip_a_fast_pan_brings_into_view_is_no_cut(dx):
     assert cuts[0] == 0.0 and cuts[1] > config.cut_grey
 
 
+@pytest.mark.parametrize("dx", [80, 120])
+def test_the_change_noise_is_measured_where_both_frames_see(dx):
+    """Sensor noise of 2 grey levels on both frames of an exactly undone pan
+    over a mid-grey texture leaves a plane difference of sigma 2 sqrt(2);
+    the strip entering the view (a quarter to a third of the frame) differs
+    by its whole grey level, and over the whole frame would raise the noise
+    every evidence test is scaled by."""
+    from motiondetect.constraint_ray.ahead import plane_maps
+    from motiondetect.measurement.dense_flow import VelocityField, pixel_grid
+    from motiondetect.measurement.image_change import difference_noise
+    from motiondetect.measurement.normal_flow import GridGeometry
+
+    rng = np.random.default_rng(dx)
+    texture = cv2.GaussianBlur(rng.normal(0.0, 1.0, (H, W + dx)), (0, 0), 3)
+    texture = 150 + 50 * texture / np.abs(texture).max()  # 100-200 grey levels
+
+    def noisy(view):
+        return np.clip(view + rng.normal(0.0, 2.0, view.shape), 0, 255).round().astype(np.uint8)
+
+    velocity = np.zeros((H, W, 2), np.float32)
+    velocity[..., 0] = -dx
+    homography = np.array([[1.0, 0, dx], [0, 1, 0], [0, 0, 1]])  # current to previous pixels
+    now, previous = noisy(texture[:, dx:]), noisy(texture[:, :W])
+    field = VelocityField(velocity, now, previous, GridGeometry((W, H), (W, H)), pixel_grid(W, H))
+    config = FitConfig()
+    inliers = np.ones(len(samples(field, config.sample_step_px)[0]), bool)
+    maps = plane_maps(field, homography, inliers, config)
+    assert maps.change_noise == difference_noise(maps.difference[:, : W - dx])
+    assert abs(maps.change_noise - (2.0 * np.sqrt(2) + 1.0)) < 0.5  # plus one level
+    assert difference_noise(maps.difference) > maps.change_noise + 1.0
+
+
 def test_a_still_camera_is_static_however_noisy_its_flow():
     """The class follows the plane's own speed: flow noise whose median
     length is 0.35 px/frame (a dim still camera) does not move the camera."""

@@ -46,7 +46,9 @@ class PlaneMaps:
     difference : (h, w) ndarray of uint8 or None
         :func:`~motiondetect.measurement.image_change.plane_difference`.
     change_noise : float or None
-        Its :func:`~motiondetect.measurement.image_change.difference_noise`.
+        Its :func:`~motiondetect.measurement.image_change.difference_noise`
+        over the pixels ``seen`` before (the strip a fast pan brings in
+        compares with nothing, and would raise it by up to half).
     residual : (h, w, 2) ndarray of float32 or None
         :func:`~.plane.plane_residual`, work px/frame.
     sampled : (N, 2) ndarray of float32 or None
@@ -91,7 +93,9 @@ def plane_maps(
         return PlaneMaps(None, None, None, None, 0.0, share, 0.0, None)
     offsets = None if lines is None else lines.field(field.shape)
     difference = plane_difference(field, homography, offsets)
-    change_noise = difference_noise(difference)
+    seen = seen_before(field, homography, offsets)
+    # What just entered compares with nothing: its "difference" is its grey level.
+    change_noise = difference_noise(difference, seen)
     residual = plane_residual(field, homography)
     if offsets is not None:
         residual = residual - offsets
@@ -99,7 +103,6 @@ def plane_maps(
     sampled = residual[step:-step:step, step:-step:step].reshape(-1, 2)
     energy = (config.aperture_noise * change_noise) ** 2
     share = explained_share(field, sampled, inliers, energy, step, config.ransac_px)
-    seen = seen_before(field, homography, offsets)
     cut = _seen_difference(seen, difference)
     return PlaneMaps(difference, change_noise, residual, sampled, energy, share, cut, seen)
 

@@ -82,7 +82,8 @@ class CameraFit:
         ``FitConfig.edge_px`` plus the median speed: the band along the
         frame edge where this frame's flow is extrapolated, work px.
     change_noise : float or None
-        :func:`difference_noise` of ``plane_difference``, grey levels
+        :func:`difference_noise` of ``plane_difference`` over the pixels
+        ``seen`` before, grey levels
         (measured once per frame; None: measured when first needed).
     sharpness : float
         :func:`sharpness` of this frame (0 while the blur test is off).
@@ -140,7 +141,7 @@ class CameraFit:
         if self.change_noise is not None:
             return self.change_noise
         if "noise" not in self._memo:
-            self._memo["noise"] = difference_noise(self.plane_difference)
+            self._memo["noise"] = difference_noise(self.plane_difference, self.seen)
         return self._memo["noise"]
 
     def change_level(self, sigmas: float) -> float:
