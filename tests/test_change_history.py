@@ -114,6 +114,36 @@ def test_a_slow_mover_changes_the_image_over_three_frames_not_one(speed):
     assert history.changed(3.0, 3) is None  # an unknown plane breaks the chain
 
 
+def test_what_entered_the_view_over_three_frames_is_no_change():
+    """A camera panning 12 px/frame past a slow mover: over three frames a
+    strip 36 px wide enters at the right, with nothing three frames back to
+    compare with. It is not called changed, and the noise is taken over what
+    both frames see, so the slow mover's body is found as on a still view."""
+    rng = np.random.default_rng(0)
+    pan, width = 12, 160
+    world = texture((120, width + 3 * pan), 1.0, 160, seed=2) + 40
+    body = texture((120, width + 3 * pan), 1.0, 200, seed=3) + 10
+    frames = []
+    for i in range(4):
+        canvas = world.copy()
+        canvas[40:80, 50:90] = shifted(body, 0.5 * i, 0)[40:80, 50:90]
+        view = canvas[:, pan * i : pan * i + width] + rng.normal(0, 1.5, (120, width))
+        frames.append(np.clip(view, 0, 255).astype(np.uint8))
+    history = ChangeHistory(3)
+    fit = SimpleNamespace(reliable=True, homography=plane_from_motion(-pan, 0))
+    for previous, grey in zip(frames, frames[1:]):
+        history.update(SimpleNamespace(grey=grey, previous_grey=previous, shape=grey.shape), fit)
+    longer = history.changed(3.0, 3)
+    entered = (slice(None), slice(width - 3 * pan, None))
+    inside = (slice(44, 76), slice(54 - 3 * pan, 86 - 3 * pan))  # the body, off its edges
+    still = np.ones(longer.shape, bool)
+    still[35:85, 45 - 3 * pan : 95 - 3 * pan] = False
+    still[entered] = False
+    assert not longer[entered].any()
+    assert longer[inside].mean() > 0.7
+    assert longer[still].mean() < 0.01
+
+
 def test_only_slow_flagged_parts_take_the_longer_baseline():
     flagged = np.zeros((40, 60), bool)
     flagged[5:15, 5:15] = True  # a slow part

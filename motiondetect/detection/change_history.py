@@ -24,6 +24,7 @@ from motiondetect.detection.regions import components
 from motiondetect.measurement.dense_flow import VelocityField
 from motiondetect.measurement.image_change import (
     chained_difference,
+    chained_seen,
     difference_noise,
     matched_exposure,
 )
@@ -59,11 +60,16 @@ class ChangeHistory:
     def changed(self, sigmas: float, box: int) -> np.ndarray | None:
         """Where the ``box``-px mean of the change since ``frames`` frames ago
         exceeds ``sigmas`` robust sigmas of that change, (h, w) bool; None
-        until that many frames are held."""
+        until that many frames are held. Both are taken where the frame
+        that far back saw too: what entered the view since compares with
+        nothing (its "change" is its grey level)."""
         if self.frames < 1 or len(self._planes) < self.frames:
             return None
-        difference = chained_difference(self._greys[0], list(self._planes), self._greys[-1])
-        return cv2.blur(difference, (box, box)) > sigmas * difference_noise(difference)
+        planes = list(self._planes)
+        difference = chained_difference(self._greys[0], planes, self._greys[-1])
+        seen = chained_seen(planes, difference.shape)
+        noise = difference_noise(difference, seen)
+        return (cv2.blur(difference, (box, box)) > sigmas * noise) & seen
 
 
 def slow_parts(flagged: np.ndarray, speed: np.ndarray, frames: int, px: float) -> np.ndarray:

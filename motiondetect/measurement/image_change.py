@@ -113,12 +113,28 @@ def chained_difference(
     grey : (h, w) ndarray of uint8
         The current working frame.
     """
+    h, w = grey.shape
+    warped = cv2.warpPerspective(oldest, _chain(homographies), (w, h), flags=cv2.WARP_INVERSE_MAP)
+    return cv2.absdiff(matched_exposure(warped, grey), grey)
+
+
+def chained_seen(homographies: list[np.ndarray], shape: tuple[int, int]) -> np.ndarray:
+    """(h, w) bool: the current pixels the chained planes (as
+    :func:`chained_difference`) take from inside the frame ``k`` back, so
+    that their chained difference compares two pictures of one place; the
+    rest entered the view since (``k`` frames of a pan's leading edge)."""
+    h, w = shape
+    inside = np.full(shape, 255, np.uint8)
+    chain = _chain(homographies)
+    return cv2.warpPerspective(inside, chain, (w, h), flags=cv2.WARP_INVERSE_MAP) == 255
+
+
+def _chain(homographies: list[np.ndarray]) -> np.ndarray:
+    """The product mapping current pixels to the frame ``k`` back."""
     chain = np.eye(3)
     for homography in homographies:  # p_{t-k} = H_{t-k+1} ... H_t p_t
         chain = chain @ homography
-    h, w = grey.shape
-    warped = cv2.warpPerspective(oldest, chain, (w, h), flags=cv2.WARP_INVERSE_MAP)
-    return cv2.absdiff(matched_exposure(warped, grey), grey)
+    return chain
 
 
 def difference_noise(difference: np.ndarray, where: np.ndarray | None = None) -> float:
