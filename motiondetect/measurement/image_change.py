@@ -72,6 +72,14 @@ def _warped_back(
         grid = field.pixel_grid.reshape(-1, 1, 2)
         previous = cv2.perspectiveTransform(grid, homography).reshape(h, w, 2) - offsets
         return cv2.remap(image, previous, None, cv2.INTER_LINEAR)
+    return _through(image, homography)
+
+
+def _through(image: np.ndarray, homography: np.ndarray) -> np.ndarray:
+    """``image`` (an earlier frame's pixels, (h, w)) at the current frame's
+    pixels, each taken from where ``homography`` (current pixels to that
+    frame's) says it was; 0 where that lies outside."""
+    h, w = image.shape[:2]
     return cv2.warpPerspective(image, homography, (w, h), flags=cv2.WARP_INVERSE_MAP)
 
 
@@ -113,8 +121,7 @@ def chained_difference(
     grey : (h, w) ndarray of uint8
         The current working frame.
     """
-    h, w = grey.shape
-    warped = cv2.warpPerspective(oldest, _chain(homographies), (w, h), flags=cv2.WARP_INVERSE_MAP)
+    warped = _through(oldest, _chain(homographies))
     return cv2.absdiff(matched_exposure(warped, grey), grey)
 
 
@@ -123,10 +130,7 @@ def chained_seen(homographies: list[np.ndarray], shape: tuple[int, int]) -> np.n
     :func:`chained_difference`) take from inside the frame ``k`` back, so
     that their chained difference compares two pictures of one place; the
     rest entered the view since (``k`` frames of a pan's leading edge)."""
-    h, w = shape
-    inside = np.full(shape, 255, np.uint8)
-    chain = _chain(homographies)
-    return cv2.warpPerspective(inside, chain, (w, h), flags=cv2.WARP_INVERSE_MAP) == 255
+    return _through(np.full(shape, 255, np.uint8), _chain(homographies)) == 255
 
 
 def _chain(homographies: list[np.ndarray]) -> np.ndarray:
