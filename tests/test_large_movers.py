@@ -25,6 +25,7 @@ from motiondetect.constraint_ray.plane import (
 )
 from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.detector import MotionDetector
+from motiondetect.detection.tracking import Tracker
 
 from .conftest import shared_path
 from .velocity_scenes import H, W, background
@@ -123,6 +124,50 @@ def test_a_followed_mover_filling_half_the_view_leaves_the_background_plane(excl
     else:
         assert np.median(found) < 0.1
         assert np.median(background_px) > 5000
+
+
+def _cornered_mover(frames: int = 36, arm: float = 0.45):
+    """As :func:`_followed_mover`, but an L-shaped mover (two arms ``arm``
+    of its box wide) whose box grows from 30 % to 90 % of the view: its
+    pixels, 21-63 % of it, leave the background a corner."""
+    for t in range(frames):
+        share = 0.3 + 0.6 * min(t / 30, 1.0)
+        mw, mh = int(W * np.sqrt(share)), int(H * np.sqrt(share))
+        x, y = (W - mw) // 2 + int(round(6 * np.sin(t / 5))), (H - mh) // 2
+        inside = np.zeros((mh, mw), bool)
+        inside[:, : int(arm * mw)] = True
+        inside[int((1 - arm) * mh) :, :] = True
+        frame = background(3.0 * t)
+        texture = cv2.resize(COFFEE, (mw, mh), interpolation=cv2.INTER_AREA)
+        frame[y : y + mh, x : x + mw][inside] = texture[inside]
+        mask = np.zeros((H, W), bool)
+        mask[y : y + mh, x : x + mw] = inside
+        yield frame, mask, share
+
+
+@pytest.mark.parametrize("own_pixels", [True, False])
+def test_a_mover_whose_box_fills_the_view_leaves_out_its_own_pixels(monkeypatch, own_pixels):
+    """Once an L-shaped mover's box covers more than 1 - ``min_inlier_share``
+    of the view, the box leaves too few samples to fit the plane to; its
+    pixels (56-63 %, grown by half a flow patch) do not. Measured over the
+    frames whose box covers 82-90 % of the view: covered 0.55-0.98 (mean
+    0.83) with 3000-5800 background pixels; with the boxes only, as before,
+    0.00-0.02 with 14100-24300, the mover's motion taken for the camera's."""
+    if not own_pixels:
+        monkeypatch.setattr(Tracker, "predicted_pixels", lambda *args: None)
+    md = MotionDetector("both")
+    found, background_px = [], []
+    for t, (frame, mask, share) in enumerate(_cornered_mover()):
+        flagged = md.process(frame, t, t / 30).input_mask(W, H) > 0
+        if share >= 0.82:
+            found.append(float(flagged[mask].mean()))
+            background_px.append(int(flagged[~mask].sum()))
+    assert len(found) >= 8
+    if own_pixels:
+        assert min(found) > 0.4 and np.mean(found) > 0.75
+        assert max(background_px) < 8000
+    else:
+        assert max(found) < 0.1 and min(background_px) > 10000
 
 
 # --- A mover that fills half the view from the first frame (``[fit] occluder_frames``,

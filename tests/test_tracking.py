@@ -149,6 +149,22 @@ def test_an_established_track_missed_on_a_frame_is_held_where_it_moved():
     assert unconfirmed.update([]) == []  # never reported, so never held
 
 
+def test_the_tracks_own_pixels_are_predicted_moved_on_and_grown():
+    """What the fit leaves out where a track's box would leave too little:
+    a confirmed track's last mask moved on by its velocity (as far as it
+    moved while missed) and dilated; nothing before it is confirmed."""
+    tracker = Tracker(TrackConfig(persistence=2, max_missed=3))
+    tracker.update([_seen(0.0)])
+    assert tracker.predicted_pixels((60, 120), 2) is None  # not yet confirmed
+    last = tracker.update([_seen(5.0)])[0]
+    grown = cv2.dilate(np.roll(last.mask, 5, axis=1).view(np.uint8), np.ones((5, 5), np.uint8))
+    np.testing.assert_array_equal(tracker.predicted_pixels((60, 120), 2), grown > 0)
+    tracker.update([])  # missed: predicted two frames' motion on
+    moved = tracker.predicted_pixels((60, 120), 0)
+    np.testing.assert_array_equal(moved, np.roll(last.mask, 10, axis=1))
+    assert tracker.predicted_pixels((30, 60), 0) is None  # masks of another size
+
+
 def test_a_mover_that_stops_moving_is_held_for_one_frame():
     """The patch moves across the pan, then rides with the background (rigid
     from frame 14): its track, once missed, is reported held on that one

@@ -98,7 +98,10 @@ class FitConfig:
         them at least as well as the rest) and the rest of the samples are
         likelier without them (:func:`~.plane.fit_homography_without`), as
         long as at least ``min_inlier_share`` of the samples remains (a
-        plane explaining fewer could not be judged anyway). Off: every sample votes, and a
+        plane explaining fewer could not be judged anyway; where the boxes
+        leave less, the tracks' own pixels are left out instead:
+        :meth:`~motiondetect.detection.tracking.Tracker.predicted_pixels`).
+        Off: every sample votes, and a
         mover the camera follows takes the plane once it covers about as
         much of the view as the background (docs/detectors.md, "Tracked
         movers do not vote for the camera's motion").

@@ -299,13 +299,19 @@ class MotionDetector:
         )  # fmt: skip
 
     def _fitted(self, flow: VelocityField, predicted: np.ndarray) -> CameraFit:
-        """The frame's :func:`fit_camera`, the ``predicted`` tracks' samples or
-        an occluder's (:class:`LayerOrder`) left out where they carry the plane;
+        """The frame's :func:`fit_camera`, the ``predicted`` tracks' samples (their
+        own pixels where their boxes leave too few) or an occluder's
+        (:class:`LayerOrder`) left out where they carry the plane;
         the blur reference, the epipole and the layer order learn from it."""
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         occluder = self._order.occluder  # a mover that fills the view and took the plane
+        movers = predicted
+        if predicted is not None and predicted.mean() > 1.0 - self.fit_config.min_inlier_share:
+            # The boxes leave too little to fit the plane to: the tracks' own pixels,
+            # grown by half a flow patch (how far a mover's velocity reaches past it).
+            movers = self.tracker.predicted_pixels(flow.shape, flow.patch_px // 2)
         fit = fit_camera(
-            flow, self.fit_config, self._epipole, reference, predicted, occluder, self._sampled
+            flow, self.fit_config, self._epipole, reference, movers, occluder, self._sampled
         )
         self._order.update(flow, fit.voted, fit.voted_inliers, fit.edge_band_px)
         if self.fit_config.blur_ratio > 0:  # the blur test's reference

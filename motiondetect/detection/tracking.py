@@ -90,6 +90,20 @@ class Tracker:
             mask[rows, max(int(x0), 0) : max(int(np.ceil(x1)), 0)] = True
         return mask
 
+    def predicted_pixels(self, shape: tuple[int, int], grow_px: int) -> np.ndarray | None:
+        """Where the confirmed tracks' own pixels should be now: each last
+        mask moved on by its velocity, dilated by ``grow_px``, (h, w) bool;
+        None without any. Finer than :meth:`predicted_mask`'s boxes, which
+        a large or oblique mover can fill to the frame's edges."""
+        confirmed = [t for t in self._tracks if t.age >= self.config.persistence]
+        kept = [t for t in confirmed if t.mask is not None and t.mask.shape == shape]
+        masks = [_moved(t.mask, t.velocity, t.missed + 1) for t in kept]
+        if not masks:
+            return None
+        side = 2 * grow_px + 1
+        union = np.logical_or.reduce(masks).view(np.uint8)
+        return cv2.dilate(union, np.ones((side, side), np.uint8)) > 0
+
     def _assign(self, objects: list[MovingObject], predicted: list[tuple]) -> list[int | None]:
         """For each object, the index of the track it continues, or None.
 
@@ -165,12 +179,16 @@ def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
     established = max(config.hold_age, config.persistence)  # a held track is a confirmed one
     if track.mask is None or track.missed > config.hold_frames or track.age < established:
         return None
-    dx, dy = (v * track.missed for v in track.velocity)
-    h, w = track.mask.shape
-    shift = np.float32([[1, 0, dx], [0, 1, dy]])
-    mask = cv2.warpAffine(track.mask.view(np.uint8), shift, (w, h), flags=cv2.INTER_NEAREST) > 0
+    mask = _moved(track.mask, track.velocity, track.missed)
     if not mask.any():
         return None
     ys, xs = true_pixels(mask)
     box = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
     return MovingObject(mask, box, track.velocity, track.id, track.age, held=True)
+
+
+def _moved(mask: np.ndarray, velocity: tuple[float, float], frames: int) -> np.ndarray:
+    """``mask``, (h, w) bool, moved on by ``velocity`` px/frame over ``frames`` frames."""
+    h, w = mask.shape
+    shift = np.float32([[1, 0, velocity[0] * frames], [0, 1, velocity[1] * frames]])
+    return cv2.warpAffine(mask.view(np.uint8), shift, (w, h), flags=cv2.INTER_NEAREST) > 0
