@@ -22,6 +22,7 @@ epipole, the previous frame's estimate.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cv2
@@ -269,6 +270,7 @@ def fit_camera(
     movers: np.ndarray | None = None,
     occluder: tuple[np.ndarray, np.ndarray] | None = None,
     previous_sampled: np.ndarray | None = None,
+    finer_movers: Callable[[], np.ndarray | None] | None = None,
 ) -> CameraFit:
     """Fit the observer's motion to one frame's velocity field.
 
@@ -281,10 +283,11 @@ def fit_camera(
     movers : (h, w) ndarray of bool, optional
         Where the confirmed tracks are predicted: their samples stop voting
         where they carry the plane (:func:`~.plane.fit_homography_without`).
+    finer_movers : callable, optional
+        Their own pixels ((h, w) bool or None), asked for where ``movers`` leaves too few.
     occluder : ((3, 3) ndarray, (3, 3) ndarray), optional
-        The last motions of a mover in front that carried the plane and of
-        the layer behind it (:class:`~.layer_order.LayerOrder`): the samples
-        nearer the first stop voting, in place of the tracks'.
+        The last motions of a mover in front that carried the plane and of the layer
+        behind it (:class:`~.layer_order.LayerOrder`): the samples nearer the first stop voting.
 
     Returns
     -------
@@ -293,15 +296,14 @@ def fit_camera(
     """
     ahead = ahead_of(field, config, maps=False)  # prepared with its maps, or without
     points, velocity, speed = ahead.points, ahead.velocity, ahead.speed
-    homography, inliers, voted, voters = _plane(ahead, movers, occluder, config)
-    maps = ahead.maps if homography is ahead.voted[0] else None  # most frames keep it
-    if maps is None:
-        maps = plane_maps(field, homography, inliers, config)
+    homography, inliers, voted, voters = _plane(ahead, (movers, finer_movers), occluder, config)
+    kept = homography is ahead.voted[0] and ahead.maps is not None  # most frames keep it
+    maps = ahead.maps if kept else plane_maps(field, homography, inliers, config)
     plain = maps.sampled
     homography, inliers, maps = wobble_removed(
         field, ahead, homography, inliers, maps, movers, previous_sampled
     )
-    difference, residual, sampled, share = maps.difference, maps.residual, maps.sampled, maps.share
+    residual, sampled, share = maps.residual, maps.sampled, maps.share
     sharp = ahead.sharpness
     blurred = reference_sharpness is not None and sharp < config.blur_ratio * reference_sharpness
     reason = _reason(homography, share, speed, field.searched_px, maps.cut, blurred, config)
@@ -316,7 +318,7 @@ def fit_camera(
     epipole = _epipole(field, points, sampled, magnitude, noise, config, previous_epipole)
     spread = _spread(points, magnitude, voters, movers, config)
     return CameraFit(
-        homography, residual, noise, share, epipole, "", speed, difference, spread, edge,
+        homography, residual, noise, share, epipole, "", speed, maps.difference, spread, edge,
         maps.change_noise, sharp, maps.energy, float(np.median(vector_length(velocity - sampled))),
         voted[0], voted[1], plain, maps.seen,
     )  # fmt: skip
@@ -344,11 +346,12 @@ def _at_samples(mask: np.ndarray | None, points: np.ndarray) -> np.ndarray | Non
 
 def _plane(
     ahead: Ahead,
-    movers: np.ndarray | None,
+    movers: tuple[np.ndarray | None, Callable[[], np.ndarray | None] | None],
     occluder: tuple[np.ndarray, np.ndarray] | None,
     config: FitConfig,
 ) -> tuple[np.ndarray | None, np.ndarray, tuple[np.ndarray | None, np.ndarray], np.ndarray]:
-    """RANSAC's plane and its inliers, the samples on ``movers`` (with
+    """RANSAC's plane and its inliers, the samples on ``movers`` (the
+    tracks' boxes, or their own pixels where the boxes leave too few; with
     ``occluder``, those nearer its motion instead) not voting where they
     carry the plane (:func:`~.plane.fit_homography_without`); the plane all
     samples vote for, with its inliers; and the samples the plane kept was
@@ -356,11 +359,16 @@ def _plane(
     kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
     points, velocity, voted = ahead.points, ahead.velocity, ahead.voted
     on_movers = np.zeros(len(points), bool)
+    boxes, finer = movers
     if occluder is not None:  # the tracks found while it held the plane lie off it
         front, behind = (plane_error(points, velocity, h) for h in occluder)
         on_movers = front < behind
-    elif movers is not None and config.exclude_tracks:
-        on_movers = _at_samples(movers, points)
+    elif boxes is not None and config.exclude_tracks:
+        on_movers = _at_samples(boxes, points)
+        if finer is not None and (~on_movers).mean() < config.min_inlier_share:
+            pixels = finer()
+            if pixels is not None:
+                on_movers = _at_samples(pixels, points)
     homography, inliers = fit_homography_without(
         points, velocity, on_movers, config.ransac_px, min_rest=config.min_inlier_share,
         voted=voted, **kwargs,

@@ -17,6 +17,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import dataclasses
+import functools
 from collections.abc import Callable, Iterable, Iterator
 
 import cv2
@@ -305,14 +306,13 @@ class MotionDetector:
         the blur reference, the epipole and the layer order learn from it."""
         reference = float(np.median(self._sharpness)) if self._sharpness else None
         occluder = self._order.occluder  # a mover that fills the view and took the plane
-        movers = predicted
-        if predicted is not None and predicted.mean() > 1.0 - self.fit_config.min_inlier_share:
-            # The boxes leave too little to fit the plane to: the tracks' own pixels,
-            # grown by half a flow patch (how far a mover's velocity reaches past it).
-            movers = self.tracker.predicted_pixels(flow.shape, flow.patch_px // 2)
+        # Where the boxes leave too little to fit the plane to: the tracks' own pixels,
+        # grown by half a flow patch (how far a mover's velocity reaches past it).
+        pixels = functools.partial(self.tracker.predicted_pixels, flow.shape, flow.patch_px // 2)
         fit = fit_camera(
-            flow, self.fit_config, self._epipole, reference, movers, occluder, self._sampled
-        )
+            flow, self.fit_config, self._epipole, reference, predicted, occluder, self._sampled,
+            finer_movers=pixels,
+        )  # fmt: skip
         self._order.update(flow, fit.voted, fit.voted_inliers, fit.edge_band_px)
         if self.fit_config.blur_ratio > 0:  # the blur test's reference
             self._sharpness.append(fit.sharpness)
