@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from skimage import data
 
+from motiondetect.constraint_ray.camera_fit import fit_camera
 from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.constraint_ray.layer_order import front_verdict
 from motiondetect.constraint_ray.plane import (
@@ -28,7 +29,7 @@ from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.tracking import Tracker
 
 from .conftest import shared_path
-from .velocity_scenes import H, W, background
+from .velocity_scenes import H, W, background, field_between
 
 BAND = FitConfig().max_speed_px
 REST = FitConfig().min_inlier_share
@@ -143,6 +144,42 @@ def _cornered_mover(frames: int = 36, arm: float = 0.45):
         mask = np.zeros((H, W), bool)
         mask[y : y + mh, x : x + mw] = inside
         yield frame, mask, share
+
+
+def test_the_tracks_own_pixels_are_asked_for_only_where_their_boxes_leave_too_few_samples():
+    """``fit_camera``'s choice is made on the 8-px grid's samples: a box of
+    74.7 % of the pixels holds 77 % of the samples (the frame-edge band has
+    none), so the tracks' own pixels (an L of 70 % of the view) are asked
+    for; then the pan's plane is found, the L's motion left out.
+    Without them the L, still in the view, takes the plane. A box that
+    leaves enough samples is used as it is, and the pixels are not made."""
+    frames = [frame for frame, _, _ in _cornered_mover(2)]
+    inside = np.zeros((H, W), np.uint8)
+    inside[:, : int(0.45 * W)] = 1
+    inside[int(0.55 * H) :, :] = 1
+    mover = inside > 0
+    still = np.where(mover[..., None], frames[0], background(3.0))
+    field = field_between(np.where(mover[..., None], frames[0], background(0.0)), still)
+    box = np.zeros((H, W), bool)
+    box[:, 8:247] = True  # 74.7 % of the pixels, 30 of the grid's 39 columns
+    asked = []
+
+    def pixels() -> np.ndarray:
+        asked.append(True)
+        return mover
+
+    def pan_error(fit) -> float:  # off the L, the view moves (-3, 0) px/frame
+        point = np.array([[[300.0, 20.0]]])
+        velocity = (point - cv2.perspectiveTransform(point, fit.homography))[0, 0]
+        return float(np.hypot(*(velocity - [-3.0, 0.0])))
+
+    assert box.mean() < 1 - REST and pan_error(fit_camera(field, FitConfig(), movers=box)) > 2.0
+    assert pan_error(fit_camera(field, FitConfig(), movers=box, finer_movers=pixels)) < 0.3
+    assert asked == [True]
+    half = np.zeros((H, W), bool)
+    half[:, : W // 2] = True
+    fit_camera(field, FitConfig(), movers=half, finer_movers=pixels)
+    assert asked == [True]
 
 
 @pytest.mark.parametrize("own_pixels", [True, False])
