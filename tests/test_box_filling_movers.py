@@ -20,18 +20,24 @@ from motiondetect.constraint_ray.fit_config import FitConfig
 from motiondetect.detection.detector import MotionDetector
 from motiondetect.detection.tracking import Tracker
 
-from .velocity_scenes import H, W, background, field_between
+from .velocity_scenes import H, W, background, coverage, field_between
 
 REST = FitConfig().min_inlier_share
 COFFEE = cv2.cvtColor(data.coffee(), cv2.COLOR_RGB2BGR)
 
 
+def _box_share(t: int) -> float:
+    """The share of the view the cornered mover's box covers on frame ``t``."""
+    return 0.3 + 0.6 * min(t / 30, 1.0)
+
+
 def _cornered_mover(frames: int = 36, arm: float = 0.45):
-    """As :func:`_followed_mover`, but an L-shaped mover (two arms ``arm``
-    of its box wide) whose box grows from 30 % to 90 % of the view: its
-    pixels, 21-63 % of it, leave the background a corner."""
+    """A camera panning 3 px/frame follows an L-shaped textured mover (two
+    arms ``arm`` of its box wide), wobbling 6 px about the centre, whose
+    box grows from 30 % to 90 % of the view: its pixels, 21-63 % of it,
+    leave the background a corner. Frames and masks."""
     for t in range(frames):
-        share = 0.3 + 0.6 * min(t / 30, 1.0)
+        share = _box_share(t)
         mw, mh = int(W * np.sqrt(share)), int(H * np.sqrt(share))
         x, y = (W - mw) // 2 + int(round(6 * np.sin(t / 5))), (H - mh) // 2
         inside = np.zeros((mh, mw), bool)
@@ -42,7 +48,7 @@ def _cornered_mover(frames: int = 36, arm: float = 0.45):
         frame[y : y + mh, x : x + mw][inside] = texture[inside]
         mask = np.zeros((H, W), bool)
         mask[y : y + mh, x : x + mw] = inside
-        yield frame, mask, share
+        yield frame, mask
 
 
 def test_the_tracks_own_pixels_are_asked_for_only_where_their_boxes_leave_too_few_samples():
@@ -52,7 +58,7 @@ def test_the_tracks_own_pixels_are_asked_for_only_where_their_boxes_leave_too_fe
     for; then the pan's plane is found, the L's motion left out.
     Without them the L, still in the view, takes the plane. A box that
     leaves enough samples is used as it is, and the pixels are not made."""
-    frames = [frame for frame, _, _ in _cornered_mover(2)]
+    frames = [frame for frame, _ in _cornered_mover(2)]
     inside = np.zeros((H, W), np.uint8)
     inside[:, : int(0.45 * W)] = 1
     inside[int(0.55 * H) :, :] = 1
@@ -91,13 +97,9 @@ def test_a_mover_whose_box_fills_the_view_leaves_out_its_own_pixels(monkeypatch,
     0.00-0.02 with 14100-24300, the mover's motion taken for the camera's."""
     if not own_pixels:
         monkeypatch.setattr(Tracker, "predicted_pixels", lambda *args: None)
-    md = MotionDetector("both")
-    found, background_px = [], []
-    for t, (frame, mask, share) in enumerate(_cornered_mover()):
-        flagged = md.process(frame, t, t / 30).input_mask(W, H) > 0
-        if share >= 0.82:
-            found.append(float(flagged[mask].mean()))
-            background_px.append(int(flagged[~mask].sum()))
+    found, background_px = coverage(
+        MotionDetector("both"), _cornered_mover(), lambda t, _: _box_share(t) >= 0.82
+    )
     assert len(found) >= 8
     if own_pixels:
         assert min(found) > 0.4 and np.mean(found) > 0.75

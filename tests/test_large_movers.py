@@ -27,7 +27,7 @@ from motiondetect.constraint_ray.velocity_filter import VelocityRayConfig
 from motiondetect.detection.detector import MotionDetector
 
 from .conftest import shared_path
-from .velocity_scenes import H, W, background
+from .velocity_scenes import H, W, background, coverage
 
 BAND = FitConfig().max_speed_px
 REST = FitConfig().min_inlier_share
@@ -110,12 +110,7 @@ def test_a_followed_mover_filling_half_the_view_leaves_the_background_plane(excl
     (mean 0.93) with 270-1440 background pixels, against 0.00-0.38 (median
     0.01) with 7200-22700."""
     md = MotionDetector("both", FitConfig(exclude_tracks=exclude_tracks))
-    found, background_px = [], []
-    for t, (frame, mask) in enumerate(_followed_mover()):
-        flagged = md.process(frame, t, t / 30).input_mask(W, H) > 0
-        if mask.mean() >= 0.45:
-            found.append(float(flagged[mask].mean()))
-            background_px.append(int(flagged[~mask].sum()))
+    found, background_px = coverage(md, _followed_mover(), lambda t, mask: mask.mean() >= 0.45)
     assert len(found) >= 12
     if exclude_tracks:
         assert min(found) > 0.6 and np.mean(found) > 0.85
@@ -192,12 +187,8 @@ def test_a_mover_filling_half_the_view_from_the_first_frame(mover_px, pan_px, wo
     one false object. (Off, on one frame 0.39 of it lies in a false object
     whose rim was judged by its look, ``rim_look``: still not found.)"""
     md = MotionDetector("both", FitConfig(occluder_frames=frames))
-    found, background_px = [], []
-    for t, (frame, mask) in enumerate(_large_mover(0.55, mover_px, pan_px, wobble_px)):
-        flagged = md.process(frame, t, t / 30).input_mask(W, H) > 0
-        if t >= 15:
-            found.append(float(flagged[mask].mean()))
-            background_px.append(int(flagged[~mask].sum()))
+    clip = _large_mover(0.55, mover_px, pan_px, wobble_px)
+    found, background_px = coverage(md, clip, lambda t, mask: t >= 15)
     if frames:
         assert sum(f > 0.5 for f in found) >= 0.8 * len(found)
         assert np.median(background_px) < 3000

@@ -62,6 +62,19 @@ def mover_hits(md: MotionDetector, clip, warmup: int = 3) -> list[bool]:
     return hits
 
 
+def coverage(md: MotionDetector, clip, judged) -> tuple[list[float], list[int]]:
+    """Run ``md`` over ``clip`` ((frame, mask) pairs, ``W`` x ``H``); on each
+    frame ``judged(t, mask)`` picks: the share of the mover flagged, and the
+    number of background pixels flagged."""
+    found, background_px = [], []
+    for t, (frame, mask) in enumerate(clip):
+        flagged = md.process(frame, t, t / 30).input_mask(W, H) > 0
+        if judged(t, mask):
+            found.append(float(flagged[mask].mean()))
+            background_px.append(int(flagged[~mask].sum()))
+    return found, background_px
+
+
 def animate_on_sample(name: str, *configs, detector: str = "animate") -> tuple[float, float]:
     """(false-alarm regions per frame, object recall) of ``detector`` (the
     animate detector alone unless named) on a sample video."""
