@@ -296,7 +296,7 @@ def fit_camera(
     """
     ahead = ahead_of(field, config, maps=False)  # prepared with its maps, or without
     points, velocity, speed = ahead.points, ahead.velocity, ahead.speed
-    homography, inliers, voted, voters = _plane(ahead, (movers, finer_movers), occluder, config)
+    homography, inliers, voted, voters = _plane(ahead, movers, finer_movers, occluder, config)
     kept = homography is ahead.voted[0] and ahead.maps is not None  # most frames keep it
     maps = ahead.maps if kept else plane_maps(field, homography, inliers, config)
     plain = maps.sampled
@@ -346,12 +346,13 @@ def _at_samples(mask: np.ndarray | None, points: np.ndarray) -> np.ndarray | Non
 
 def _plane(
     ahead: Ahead,
-    movers: tuple[np.ndarray | None, Callable[[], np.ndarray | None] | None],
+    movers: np.ndarray | None,
+    finer: Callable[[], np.ndarray | None] | None,
     occluder: tuple[np.ndarray, np.ndarray] | None,
     config: FitConfig,
 ) -> tuple[np.ndarray | None, np.ndarray, tuple[np.ndarray | None, np.ndarray], np.ndarray]:
     """RANSAC's plane and its inliers, the samples on ``movers`` (the
-    tracks' boxes, or their own pixels where the boxes leave too few; with
+    tracks' boxes, or their own pixels, ``finer()``, where the boxes leave too few; with
     ``occluder``, those nearer its motion instead) not voting where they
     carry the plane (:func:`~.plane.fit_homography_without`); the plane all
     samples vote for, with its inliers; and the samples the plane kept was
@@ -359,12 +360,11 @@ def _plane(
     kwargs = {"outlier_px": config.max_speed_px, "tight_px": config.tight_px, "seed": config.seed}
     points, velocity, voted = ahead.points, ahead.velocity, ahead.voted
     on_movers = np.zeros(len(points), bool)
-    boxes, finer = movers
     if occluder is not None:  # the tracks found while it held the plane lie off it
         front, behind = (plane_error(points, velocity, h) for h in occluder)
         on_movers = front < behind
-    elif boxes is not None and config.exclude_tracks:
-        on_movers = _at_samples(boxes, points)
+    elif movers is not None and config.exclude_tracks:
+        on_movers = _at_samples(movers, points)
         if finer is not None and (~on_movers).mean() < config.min_inlier_share:
             pixels = finer()
             if pixels is not None:
