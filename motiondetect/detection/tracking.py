@@ -80,7 +80,7 @@ class Tracker:
     def predicted_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
         """Where the confirmed tracks should be now: their boxes moved by their
         own velocity, (h, w) bool; None without any."""
-        confirmed = [t for t in self._tracks if t.age >= self.config.persistence]
+        confirmed = self._confirmed()
         if not confirmed:
             return None
         mask = np.zeros(shape, bool)
@@ -95,14 +95,17 @@ class Tracker:
         mask moved on by its velocity, dilated by ``grow_px``, (h, w) bool;
         None without any. Finer than :meth:`predicted_mask`'s boxes, which
         a large or oblique mover can fill to the frame's edges."""
-        confirmed = [t for t in self._tracks if t.age >= self.config.persistence]
-        kept = [t for t in confirmed if t.mask is not None and t.mask.shape == shape]
+        kept = [t for t in self._confirmed() if t.mask is not None and t.mask.shape == shape]
         masks = [_moved(t.mask, t.velocity, t.missed + 1) for t in kept]
         if not masks:
             return None
         side = 2 * grow_px + 1
         union = np.logical_or.reduce(masks).view(np.uint8)
         return cv2.dilate(union, np.ones((side, side), np.uint8)) > 0
+
+    def _confirmed(self) -> list[_Track]:
+        """The tracks seen on ``persistence`` frames: those reported."""
+        return [t for t in self._tracks if t.age >= self.config.persistence]
 
     def _assign(self, objects: list[MovingObject], predicted: list[tuple]) -> list[int | None]:
         """For each object, the index of the track it continues, or None.
