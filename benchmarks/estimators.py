@@ -19,6 +19,7 @@ clips").
 
 from __future__ import annotations
 
+import inspect
 import sys
 import time
 from collections.abc import Callable
@@ -41,10 +42,14 @@ def recorded_calls(path: Path) -> tuple[list[Call], int]:
     """Every ``ransac_homography`` call of the default detector over ``path``, and its frames."""
     calls: list[Call] = []
     original = plane.ransac_homography
+    signature = inspect.signature(original)  # its defaults, not restated here
 
-    def recording(points, velocity, threshold_px, draws=500, confidence=0.99):
+    def recording(*args, **kwargs):
+        bound = signature.bind(*args, **kwargs)
+        bound.apply_defaults()
+        points, velocity, threshold_px, draws, confidence = bound.args
         calls.append((points.copy(), velocity.copy(), threshold_px, draws, confidence))
-        return original(points, velocity, threshold_px, draws, confidence)
+        return original(*args, **kwargs)
 
     modules = (plane, layer_order, continuation)
     for module in modules:
@@ -75,6 +80,8 @@ def usac(score: int, local: int) -> Estimator:
 
 
 def by_method(method: int) -> Estimator:
+    """``cv2.findHomography`` by ``method`` (``cv2.RANSAC``, ``cv2.USAC_FAST``...)."""
+
     def fit(points, velocity, threshold_px, draws, confidence):
         return cv2.findHomography(
             points, points - velocity, method, threshold_px, maxIters=draws, confidence=confidence
