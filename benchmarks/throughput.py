@@ -31,11 +31,13 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from common import SHARED_DATA, decode_only, make_pan_clip, mog2_on  # noqa: E402
+from peers import DenseResidual  # noqa: E402
 
 from motiondetect.app.inputs import InputJob  # noqa: E402
 from motiondetect.app.process import process_input  # noqa: E402
 from motiondetect.app.settings import make_settings  # noqa: E402
 from motiondetect.io.video import open_source  # noqa: E402
+from motiondetect.measurement.dense_flow import DenseFlow  # noqa: E402
 from motiondetect.measurement.normal_flow import NormalFlowPipeline  # noqa: E402
 
 VARIANTS = {
@@ -113,6 +115,33 @@ def stages_only(path: Path) -> int:
     return n
 
 
+def flow_only(path: Path) -> int:
+    """The tool's own measurement alone: decode to grey, then the velocity
+    field (DIS at its default settings, and the flow the other way that the
+    forward-backward check reads). What judging a frame builds on."""
+    flow = DenseFlow()
+    n = 0
+    with open_source(path) as source:
+        for frame in source:
+            flow.process(frame.grey)
+            n += 1
+    return n
+
+
+def peer_on(path: Path, method) -> int:
+    """A ``peers`` method per frame on OpenCV's decode, as ``compare.py`` runs it."""
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        method(frame)
+        n += 1
+    cap.release()
+    return n
+
+
 def run_detect(path: Path, out: Path, **options) -> int:
     settings = make_settings({"output": out, "overwrite": True, **options})
     result = process_input(InputJob(path, path.stem), settings)
@@ -142,6 +171,10 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
     rows.append(("decode only, PyAV, BGR by swscale", best(lambda: decode_pyav_swscale(clip))))
     rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
     rows.append(("stage pipeline only (decode + stages)", best(lambda: stages_only(clip))))
+    rows.append(("flow only (decode + the tool's DIS)", best(lambda: flow_only(clip))))
+    rows.append(
+        ("dense residual peer (issue 13's 5 steps)", best(lambda: peer_on(clip, DenseResidual())))
+    )
     for name, options in VARIANTS.items():
         rows.append((name, best(lambda o=options: run_detect(clip, tmp / "out", **o))))
     return rows
