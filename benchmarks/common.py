@@ -83,19 +83,23 @@ def decode_only(path: Path) -> int:
     return n
 
 
-def mog2_on(path: Path) -> int:
-    """OpenCV MOG2 per frame, as DVR-Scan uses it (decode included)."""
-    sub = cv2.createBackgroundSubtractorMOG2()
+def on_frames(path: Path, apply) -> int:
+    """``apply`` on each BGR frame of ``path`` as OpenCV decodes it; the frame count."""
     cap = cv2.VideoCapture(str(path))
     n = 0
     while True:
         ok, f = cap.read()
         if not ok:
             break
-        sub.apply(f)
+        apply(f)
         n += 1
     cap.release()
     return n
+
+
+def mog2_on(path: Path) -> int:
+    """OpenCV MOG2 per frame, as DVR-Scan uses it (decode included)."""
+    return on_frames(path, cv2.createBackgroundSubtractorMOG2().apply)
 
 
 def peak_rss_mb() -> float:

@@ -30,7 +30,7 @@ import cv2
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from common import SHARED_DATA, decode_only, make_pan_clip, mog2_on  # noqa: E402
+from common import SHARED_DATA, decode_only, make_pan_clip, mog2_on, on_frames  # noqa: E402
 from peers import DenseResidual  # noqa: E402
 
 from motiondetect.app.inputs import InputJob  # noqa: E402
@@ -105,41 +105,25 @@ def encode_cost(clip: Path, tmp: Path) -> None:
         enc.FORMATS[".mp4"][2].update(default)
 
 
-def stages_only(path: Path) -> int:
-    pipe = NormalFlowPipeline()
+def on_grey(path: Path, process) -> int:
+    """``process`` on each frame's grey as the tool reads it (PyAV); the frame count."""
     n = 0
     with open_source(path) as source:
         for frame in source:
-            pipe.process(frame.grey)
+            process(frame.grey)
             n += 1
     return n
+
+
+def stages_only(path: Path) -> int:
+    return on_grey(path, NormalFlowPipeline().process)
 
 
 def flow_only(path: Path) -> int:
     """The tool's own measurement alone: decode to grey, then the velocity
     field (DIS at its default settings, and the flow the other way that the
     forward-backward check reads). What judging a frame builds on."""
-    flow = DenseFlow()
-    n = 0
-    with open_source(path) as source:
-        for frame in source:
-            flow.process(frame.grey)
-            n += 1
-    return n
-
-
-def peer_on(path: Path, method) -> int:
-    """A ``peers`` method per frame on OpenCV's decode, as ``compare.py`` runs it."""
-    cap = cv2.VideoCapture(str(path))
-    n = 0
-    while True:
-        ok, frame = cap.read()
-        if not ok:
-            break
-        method(frame)
-        n += 1
-    cap.release()
-    return n
+    return on_grey(path, DenseFlow().process)
 
 
 def run_detect(path: Path, out: Path, **options) -> int:
@@ -173,7 +157,7 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
     rows.append(("stage pipeline only (decode + stages)", best(lambda: stages_only(clip))))
     rows.append(("flow only (decode + the tool's DIS)", best(lambda: flow_only(clip))))
     rows.append(
-        ("dense residual peer (issue 13's 5 steps)", best(lambda: peer_on(clip, DenseResidual())))
+        ("dense residual peer (issue 13's 5 steps)", best(lambda: on_frames(clip, DenseResidual())))
     )
     for name, options in VARIANTS.items():
         rows.append((name, best(lambda o=options: run_detect(clip, tmp / "out", **o))))
