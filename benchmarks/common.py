@@ -97,6 +97,20 @@ def on_frames(path: Path, apply) -> int:
     return n
 
 
+def on_grey(path: Path, process) -> int:
+    """``process`` on each frame's grey as the tool reads it (PyAV); the frame count."""
+    # Imported here: MOG2's whole-process timing imports this module, and
+    # should not pay for loading the package.
+    from motiondetect.io.video import open_source
+
+    n = 0
+    with open_source(path) as source:
+        for frame in source:
+            process(frame.grey)
+            n += 1
+    return n
+
+
 def mog2_on(path: Path) -> int:
     """OpenCV MOG2 per frame, as DVR-Scan uses it (decode included)."""
     return on_frames(path, cv2.createBackgroundSubtractorMOG2().apply)

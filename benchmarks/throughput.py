@@ -30,7 +30,7 @@ import cv2
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from common import SHARED_DATA, decode_only, make_pan_clip, mog2_on, on_frames  # noqa: E402
+from common import SHARED_DATA, decode_only, make_pan_clip, mog2_on, on_frames, on_grey  # noqa: E402
 from peers import DenseResidual  # noqa: E402
 
 from motiondetect.app.inputs import InputJob  # noqa: E402
@@ -105,27 +105,6 @@ def encode_cost(clip: Path, tmp: Path) -> None:
         enc.FORMATS[".mp4"][2].update(default)
 
 
-def on_grey(path: Path, process) -> int:
-    """``process`` on each frame's grey as the tool reads it (PyAV); the frame count."""
-    n = 0
-    with open_source(path) as source:
-        for frame in source:
-            process(frame.grey)
-            n += 1
-    return n
-
-
-def stages_only(path: Path) -> int:
-    return on_grey(path, NormalFlowPipeline().process)
-
-
-def flow_only(path: Path) -> int:
-    """The tool's own measurement alone: decode to grey, then the velocity
-    field (DIS at its default settings, and the flow the other way that the
-    forward-backward check reads). What judging a frame builds on."""
-    return on_grey(path, DenseFlow().process)
-
-
 def run_detect(path: Path, out: Path, **options) -> int:
     settings = make_settings({"output": out, "overwrite": True, **options})
     result = process_input(InputJob(path, path.stem), settings)
@@ -154,8 +133,14 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
     rows.append(("decode only, PyAV, to BGR by OpenCV", best(lambda: decode_pyav(clip, True))))
     rows.append(("decode only, PyAV, BGR by swscale", best(lambda: decode_pyav_swscale(clip))))
     rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
-    rows.append(("stage pipeline only (decode + stages)", best(lambda: stages_only(clip))))
-    rows.append(("flow only (decode + the tool's DIS)", best(lambda: flow_only(clip))))
+    # What judging builds on: the paper's stages, or the tool's flow (DIS and the check's).
+    stages, flow = NormalFlowPipeline, DenseFlow
+    rows.append(
+        ("stage pipeline only (decode + stages)", best(lambda: on_grey(clip, stages().process)))
+    )
+    rows.append(
+        ("flow only (decode + the tool's DIS)", best(lambda: on_grey(clip, flow().process)))
+    )
     rows.append(
         ("dense residual peer (issue 13's 5 steps)", best(lambda: on_frames(clip, DenseResidual())))
     )
