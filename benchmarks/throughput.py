@@ -134,9 +134,10 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
     rows.append(("decode only, PyAV, BGR by swscale", best(lambda: decode_pyav_swscale(clip))))
     rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
     # What judging builds on: the paper's stages, or the tool's flow (DIS and the check's).
-    grey = {"stage pipeline only (decode + stages)": NormalFlowPipeline}
-    grey["flow only (decode + the tool's DIS)"] = DenseFlow
-    for name, measurement in grey.items():
+    for name, measurement in (
+        ("stage pipeline only (decode + stages)", NormalFlowPipeline),
+        ("flow only (decode + the tool's DIS)", DenseFlow),
+    ):
         rows.append((name, best(lambda m=measurement: on_grey(clip, m().process))))
     peer = "dense residual peer (issue 13's 5 steps)"
     rows.append((peer, best(lambda: on_frames(clip, DenseResidual()))))
