@@ -92,8 +92,8 @@ def seen(image: np.ndarray, t: int, args: argparse.Namespace, nearest: bool = Fa
     return cv2.warpAffine(image, window(t, size, args), output_size(size, args), flags=flags)
 
 
-def write_clip(source: Path, frames: str, truth: str, target: Path, args) -> int:
-    """The clip in ``source`` through the window into ``target``; frames written."""
+def write_clip(source: Path, frames: str, truth: str, target: Path, args) -> None:
+    """The clip in ``source`` through the window into ``target``."""
     images = numbered(source / frames, ".jpg") or numbered(source / frames, ".png")
     index = {last_number(p): t for t, p in enumerate(images)}
     (target / frames).mkdir(parents=True, exist_ok=True)
@@ -106,10 +106,8 @@ def write_clip(source: Path, frames: str, truth: str, target: Path, args) -> int
         if t is not None:
             image = cv2.imread(str(mask), cv2.IMREAD_UNCHANGED)
             cv2.imwrite(str(target / truth / mask.name), seen(image, t, args, nearest=True))
-    for extra in ("temporalROI.txt",):
-        if (source / extra).exists():
-            shutil.copy(source / extra, target / extra)
-    return len(images)
+    if (source / "temporalROI.txt").exists():  # the frames CDnet scores
+        shutil.copy(source / "temporalROI.txt", target / "temporalROI.txt")
 
 
 def main() -> None:
