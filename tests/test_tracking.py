@@ -149,6 +149,27 @@ def test_an_established_track_missed_on_a_frame_is_held_where_it_moved():
     assert unconfirmed.update([]) == []  # never reported, so never held
 
 
+def _plane(step: float) -> np.ndarray:
+    """The fitted plane of a camera that shifts the scene ``step`` px to the
+    right: a homography from this frame's pixels to the last frame's."""
+    return np.array([[1.0, 0.0, -step], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_a_held_track_goes_where_the_camera_takes_it_when_the_camera_turns_back():
+    """The scene moves 4 px/frame right, the object 2 px/frame faster (its
+    image velocity 6); then the camera turns back and the detectors miss
+    the object. Its held mask goes where this frame's plane (-4) and its own
+    2 px/frame take it, 2 px left; by its last image velocity it would be
+    put 6 px right, 8 px from the object. Without the plane, as before."""
+    for plane, shift in ((_plane(-4.0), -2), (None, 6)):
+        tracker = Tracker(TrackConfig(persistence=2, hold_frames=1, hold_age=4))
+        for t in range(4):
+            seen = tracker.update([_seen(40.0 + 6.0 * t, v=6.0)], _plane(4.0))
+        held = tracker.update([], plane)
+        assert [o.track for o in held] == [seen[0].track] and held[0].held
+        np.testing.assert_array_equal(held[0].mask, np.roll(seen[0].mask, shift, axis=1))
+
+
 def test_the_tracks_own_pixels_are_predicted_moved_on_and_grown():
     """What the fit leaves out where a track's box would leave too little:
     a confirmed track's last mask moved on by its velocity (as far as it

@@ -279,7 +279,7 @@ class MotionDetector:
             return FrameResult(
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )
-        confirmed = self.tracker.update(objects)
+        confirmed = self.tracker.update(objects, fit.homography)
         regions = [
             object_region(obj, outputs, flow.geometry, self._found_by.get(obj.track, ()))
             for obj in confirmed

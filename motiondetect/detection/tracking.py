@@ -2,9 +2,12 @@
 
 1. **Track.** Tracks choose objects in order of age: each takes the free
    object that overlaps most its box moved on by the track's own image
-   velocity (which includes the camera's motion). Tracks keep a stable
-   integer id; a part split from a confirmed track starts one that is
-   confirmed at once.
+   velocity (which includes the camera's motion; carried by this frame's
+   fitted camera motion instead, as held masks are below, the boxes also
+   keep false tracks on near surfaces alive: docs/detectors.md, "Tracks
+   carried by this frame's camera motion"). Tracks keep a stable integer
+   id; a part split from a confirmed track starts one that is confirmed at
+   once.
 2. **Persist.** An object is reported once its track has been seen on
    ``persistence`` frames; a track survives ``max_missed`` frames unseen,
    frames that cannot be judged included, but not a cut: the shot after it
@@ -13,16 +16,19 @@
    may: the flow blurs, the image-change gate finds no change on a plain
    stretch, a limb stops as it turns. A track seen on ``hold_age`` frames
    that the detectors miss on a judged frame is still reported for
-   ``hold_frames`` frames, its last mask moved on by its own velocity and
-   marked ``held`` (docs/detectors.md, "Held tracks"). A frame that cannot
-   be judged holds nothing.
+   ``hold_frames`` frames, its last mask carried by each frame's fitted
+   camera motion (the plane's homography) and moved on by its own
+   velocity less the camera's, and marked ``held`` (docs/detectors.md,
+   "Held tracks"): where the camera turns back, its image velocity would
+   put it twice the pan's speed from the mover. A frame that cannot be
+   judged holds nothing.
 4. **Expect** (optional, ``prior``). Where a confirmed track is predicted,
    the constraint ray needs less evidence to seed.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -40,6 +46,23 @@ def box_iou(a: tuple, b: tuple) -> float:
     return inter / union if union > 0 else 0.0
 
 
+def _shift(dx: float, dy: float) -> np.ndarray:
+    return np.array([[1.0, 0.0, dx], [0.0, 1.0, dy], [0.0, 0.0, 1.0]])
+
+
+def _own_velocity(
+    velocity: tuple[float, float], box: tuple, camera: np.ndarray
+) -> tuple[float, float]:
+    """An object's image ``velocity`` less the camera's at the centre of its
+    (x0, y0, x1, y1) ``box``, px/frame (``camera``: the plane's homography,
+    current to previous pixels: it moved the plane's point at ``c`` from
+    ``camera(c)``)."""
+    x0, y0, x1, y1 = box
+    centre = np.array([[[(x0 + x1) / 2, (y0 + y1) / 2]]], np.float64)
+    (cx, cy), (wx, wy) = centre[0, 0], cv2.perspectiveTransform(centre, camera)[0, 0]
+    return float(velocity[0] - (cx - wx)), float(velocity[1] - (cy - wy))
+
+
 @dataclass
 class _Track:
     id: int
@@ -48,6 +71,18 @@ class _Track:
     age: int = 1
     missed: int = 0
     mask: np.ndarray | None = None  # (h, w) bool: as last seen
+    own: tuple[float, float] | None = None  # velocity less the camera's (None: not known)
+    carried: np.ndarray = field(default_factory=lambda: np.eye(3))  # last seen -> this frame
+
+    def carry(self, camera: np.ndarray | None) -> None:
+        """Move ``carried`` on by one frame: by the camera's motion (``camera``,
+        current to previous pixels) and the track's own, or where either is
+        not known by its image velocity."""
+        if camera is None or self.own is None:
+            step = _shift(*self.velocity)
+        else:
+            step = _shift(*self.own) @ np.linalg.inv(camera)
+        self.carried = step @ self.carried
 
     def predicted(self) -> tuple[float, float, float, float]:
         """The box moved on by its velocity over the frames since it was seen."""
@@ -75,6 +110,7 @@ class Tracker:
             return
         for track in self._tracks:
             track.missed += 1
+            track.carry(None)
         self._tracks = [t for t in self._tracks if t.missed <= self.config.max_missed]
 
     def predicted_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
@@ -143,8 +179,14 @@ class Tracker:
                 return cfg.persistence
         return 1
 
-    def update(self, objects: list[MovingObject]) -> list[MovingObject]:
-        """Match this frame's objects to tracks; return the confirmed ones with ids."""
+    def update(
+        self, objects: list[MovingObject], camera: np.ndarray | None = None
+    ) -> list[MovingObject]:
+        """Match this frame's objects to tracks; return the confirmed ones with ids.
+
+        ``camera``: the frame's fitted plane, (3, 3) homography from its
+        pixels to the last frame's; it carries held tracks (None: they move
+        by their image velocity)."""
         cfg = self.config
         predicted = [t.predicted() for t in self._tracks]
         owners = self._assign(objects, predicted)
@@ -160,7 +202,8 @@ class Tracker:
                 track = self._tracks[best]
                 track.box, track.velocity = obj.box, obj.velocity_px
                 track.age, track.missed = track.age + 1, 0
-            track.mask = obj.mask
+            track.mask, track.carried = obj.mask, np.eye(3)
+            track.own = None if camera is None else _own_velocity(obj.velocity_px, obj.box, camera)
             if track.age >= cfg.persistence:
                 confirmed.append(
                     MovingObject(obj.mask, obj.box, obj.velocity_px, track.id, track.age)
@@ -168,6 +211,7 @@ class Tracker:
         matched = {t.id for t in self._tracks} - {self._tracks[i].id for i in free}
         for i in free:
             self._tracks[i].missed += 1
+            self._tracks[i].carry(camera)
             held = _held(self._tracks[i], cfg)
             if held is not None:
                 confirmed.append(held)
@@ -182,7 +226,11 @@ def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
     established = max(config.hold_age, config.persistence)  # a held track is a confirmed one
     if track.mask is None or track.missed > config.hold_frames or track.age < established:
         return None
-    mask = _moved(track.mask, track.velocity, track.missed)
+    h, w = track.mask.shape
+    moved = cv2.warpPerspective(
+        track.mask.view(np.uint8), track.carried, (w, h), flags=cv2.INTER_NEAREST
+    )
+    mask = moved > 0
     if not mask.any():
         return None
     ys, xs = true_pixels(mask)
