@@ -132,7 +132,7 @@ class Tracker:
         None without any. Finer than :meth:`predicted_mask`'s boxes, which
         a large or oblique mover can fill to the frame's edges."""
         kept = [t for t in self._confirmed() if t.mask is not None and t.mask.shape == shape]
-        masks = [_moved(t.mask, t.velocity, t.missed + 1) for t in kept]
+        masks = [_moved(t.mask, _shift(*(v * (t.missed + 1) for v in t.velocity))) for t in kept]
         if not masks:
             return None
         side = 2 * grow_px + 1
@@ -226,11 +226,7 @@ def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
     established = max(config.hold_age, config.persistence)  # a held track is a confirmed one
     if track.mask is None or track.missed > config.hold_frames or track.age < established:
         return None
-    h, w = track.mask.shape
-    moved = cv2.warpPerspective(
-        track.mask.view(np.uint8), track.carried, (w, h), flags=cv2.INTER_NEAREST
-    )
-    mask = moved > 0
+    mask = _moved(track.mask, track.carried)
     if not mask.any():
         return None
     ys, xs = true_pixels(mask)
@@ -238,8 +234,11 @@ def _held(track: _Track, config: TrackConfig) -> MovingObject | None:
     return MovingObject(mask, box, track.velocity, track.id, track.age, held=True)
 
 
-def _moved(mask: np.ndarray, velocity: tuple[float, float], frames: int) -> np.ndarray:
-    """``mask``, (h, w) bool, moved on by ``velocity`` px/frame over ``frames`` frames."""
+def _moved(mask: np.ndarray, motion: np.ndarray) -> np.ndarray:
+    """``mask``, (h, w) bool, carried by ``motion``, (3, 3): its pixels to the new ones."""
     h, w = mask.shape
-    shift = np.float32([[1, 0, velocity[0] * frames], [0, 1, velocity[1] * frames]])
-    return cv2.warpAffine(mask.view(np.uint8), shift, (w, h), flags=cv2.INTER_NEAREST) > 0
+    if np.array_equal(motion[2], (0.0, 0.0, 1.0)):  # a shift, as by the image velocity
+        moved = cv2.warpAffine(mask.view(np.uint8), motion[:2], (w, h), flags=cv2.INTER_NEAREST)
+    else:
+        moved = cv2.warpPerspective(mask.view(np.uint8), motion, (w, h), flags=cv2.INTER_NEAREST)
+    return moved > 0
