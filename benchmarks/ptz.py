@@ -57,15 +57,19 @@ def _bounce(travel: float) -> float:
     return phase if phase <= 1.0 else 2.0 - phase
 
 
+def _moving_frames(t: int, hold: int) -> int:
+    """Frames the window has moved on before frame ``t``: all of them, or with
+    ``hold`` K the first K of every 2K (it stands for the other K)."""
+    if hold <= 0:
+        return t
+    return (t // (2 * hold)) * hold + min(t % (2 * hold), hold)
+
+
 def window(t: int, size: tuple[int, int], args: argparse.Namespace) -> np.ndarray:
     """The 2x3 affine map from frame ``t``'s output pixels to the picture's
     (``size``: the picture's width and height)."""
     width, height = size
-    moved = (
-        t
-        if args.hold <= 0
-        else (t // (2 * args.hold)) * args.hold + min(t % (2 * args.hold), args.hold)
-    )
+    moved = _moving_frames(t, args.hold)
     zoom = 1.0
     if args.zoom > 0:
         zoom += args.zoom * (1.0 - np.cos(2.0 * np.pi * moved / args.period)) / 2.0
