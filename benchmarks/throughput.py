@@ -38,6 +38,7 @@ from motiondetect.app.process import process_input  # noqa: E402
 from motiondetect.app.settings import make_settings  # noqa: E402
 from motiondetect.io.video import open_source  # noqa: E402
 from motiondetect.measurement.dense_flow import DenseFlow  # noqa: E402
+from motiondetect.measurement.flow_config import DenseFlowConfig  # noqa: E402
 from motiondetect.measurement.normal_flow import NormalFlowPipeline  # noqa: E402
 
 VARIANTS = {
@@ -133,10 +134,13 @@ def speed(clip: Path, tmp: Path, repeat: int) -> list[tuple[str, float]]:
     rows.append(("decode only, PyAV, to BGR by OpenCV", best(lambda: decode_pyav(clip, True))))
     rows.append(("decode only, PyAV, BGR by swscale", best(lambda: decode_pyav_swscale(clip))))
     rows.append(("OpenCV MOG2 (decode + apply)", best(lambda: mog2_on(clip))))
-    # What judging builds on: the paper's stages, or the tool's flow (DIS and the check's).
+    # What judging builds on: the paper's stages, or the tool's flow (DIS and
+    # the check's), and the forward flow alone: the least the velocity path needs.
+    forward = DenseFlowConfig(check_preset="off")
     for name, measurement in (
         ("stage pipeline only (decode + stages)", NormalFlowPipeline),
         ("flow only (decode + the tool's DIS)", DenseFlow),
+        ("forward flow alone (no check's flow)", lambda: DenseFlow(forward)),
     ):
         rows.append((name, best(lambda m=measurement: on_grey(clip, m().process))))
     peer = "dense residual peer (issue 13's 5 steps)"

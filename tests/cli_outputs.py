@@ -60,11 +60,17 @@ def check_outputs(out: Path, frames: int, video: bool = True, timeline: bool = T
     rows = list(csv.reader((out / "detections.csv").read_text().splitlines()))
     assert rows[0] == [
         "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track", "held",
+        "vx_px_s", "vy_px_s", "own_vx_px_s", "own_vy_px_s",
     ]  # fmt: skip
     assert len(rows) - 1 == summary["totals"]["detections"]
     records = [d for r in map(json.loads, lines) for d in r["detections"]]
     tracks = [(str(d.get("track", "")), "1" if d.get("held") else "") for d in records]
-    assert [(row[-2], row[-1]) for row in rows[1:]] == tracks
+    assert [(row[9], row[10]) for row in rows[1:]] == tracks
+    velocities = [
+        [str(v) for key in ("velocity_px_s", "own_velocity_px_s") for v in d.get(key, ("", ""))]
+        for d in records
+    ]
+    assert [row[11:] for row in rows[1:]] == velocities
     assert (out / "events.csv").exists()
     check_tracks(out, rows[1:], summary)
     assert (out / "timeline.png").exists() == timeline

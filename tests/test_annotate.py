@@ -8,8 +8,15 @@ import pytest
 
 from motiondetect.detection.detector import FrameResult
 from motiondetect.detection.regions import Region
-from motiondetect.io.annotate import MIN_WIDTH, TRAIL_FRAMES, Trails, annotate, annotated_size
-from motiondetect.io.colours import RAY
+from motiondetect.io.annotate import (
+    MIN_WIDTH,
+    OWN_ARROW_S,
+    TRAIL_FRAMES,
+    Trails,
+    annotate,
+    annotated_size,
+)
+from motiondetect.io.colours import OWN_MOTION, RAY
 
 
 @pytest.mark.parametrize("size", [(232, 152), (352, 288), (854, 480)])
@@ -134,3 +141,27 @@ def test_a_held_track_is_drawn_thin_and_labelled_held():
     assert held[side].any(axis=0).sum() == 1 < found[side].any(axis=0).sum()
     label = (slice(80, 96), slice(100, 160))
     assert not np.array_equal(found[label], held[label])  # "#3 held", not "#3 0.90"
+
+
+def test_a_detections_own_motion_is_drawn_as_an_arrow_from_its_centre():
+    """A box at (100-160, 80-140) moving against the background at 80 px/s to
+    the right and 40 px/s down: a cyan arrow from its centre (130, 110) to
+    40 px right and 20 down (half a second's motion), drawn on a frame half
+    the input's size at half those lengths; none without a velocity."""
+    grey = np.full((120, 160, 3), 128, np.uint8)
+
+    def drawn(own) -> np.ndarray:
+        region = Region(
+            [100, 80, 60, 60], np.zeros((0, 2), int), 3600, 0.9, ("velocity-ray",), 3,
+            own_velocity_px_s=own,
+        )  # fmt: skip
+        result = FrameResult(9, 0.3, [region], np.zeros((64, 64), bool), None, None, None)
+        out = annotate(grey, result, (160, 120), input_size=(320, 240))
+        return np.all(out == OWN_MOTION, axis=2)
+
+    assert OWN_ARROW_S == 0.5
+    arrow = drawn((80.0, 40.0)) & ~drawn(None)
+    ys, xs = np.nonzero(arrow)
+    assert len(xs) and abs(xs.min() - 65) <= 1 and abs(ys.min() - 55) <= 1  # (130, 110) / 2
+    assert arrow[65, 85] and xs.max() <= 86  # to 20 px right and 10 down, no farther
+    assert not (drawn((1.0, 0.0)) & ~drawn(None)).any()  # too short to draw

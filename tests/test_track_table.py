@@ -47,7 +47,7 @@ def test_tracks_csv_has_the_columns_and_one_row_per_track():
     assert rows[0] == TRACK_COLUMNS
     assert rows[1] == [
         "1", "1", "2", "0.0333", "0.0667", "00:00:00.033", "00:00:00.067", "0.0333", "2", "2",
-        "0.5000", "velocity-ray", "5.0", "8.0", "7.0", "8.0", "2", "4", "8", "8",
+        "0.5000", "velocity-ray", "5.0", "8.0", "7.0", "8.0", "2", "4", "8", "8", "", "",
     ]  # fmt: skip
 
 
@@ -55,3 +55,20 @@ def test_no_tracks_gives_the_header_alone():
     fp = io.StringIO()
     write_tracks_csv(fp, TrackTable().rows())
     assert fp.getvalue().splitlines() == [",".join(TRACK_COLUMNS)]
+
+
+def test_a_tracks_own_velocity_is_the_mean_of_its_found_frames():
+    """(30, -10) and (50, 0) px/s on the frames it was found, then held with
+    its last repeated: the mean of the two found, (40, -5); in tracks.csv's
+    last two columns."""
+    table = TrackTable()
+    for frame, own, held in (
+        (1, (30.0, -10.0), False), (2, (50.0, 0.0), False), (3, (50.0, 0.0), True),
+    ):  # fmt: skip
+        found = detection(5, (10, 10, 4, 4), 0.5) | {"own_velocity_px_s": list(own)}
+        table.add(frame, frame / 30, [found | {"held": True} if held else found])
+    (row,) = table.rows()
+    assert (row["own_vx_px_s"], row["own_vy_px_s"]) == (40.0, -5.0)
+    fp = io.StringIO()
+    write_tracks_csv(fp, table.rows())
+    assert list(csv.reader(fp.getvalue().splitlines()))[1][-2:] == ["40.0", "-5.0"]

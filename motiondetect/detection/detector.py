@@ -33,7 +33,7 @@ from motiondetect.detection.base import DETECTOR_SETS, registry
 from motiondetect.detection.change_history import BackgroundMemory, ChangeHistory, slow_parts
 from motiondetect.detection.frame_result import FrameResult
 from motiondetect.detection.framing import Framing
-from motiondetect.detection.fusion import fuse, object_region
+from motiondetect.detection.fusion import FrameMotion, fuse, object_region
 from motiondetect.detection.layers import assigned_objects
 from motiondetect.detection.objects import MovingObject, TrackConfig, group_objects
 from motiondetect.detection.regions import Region, regions_mask
@@ -125,7 +125,7 @@ class MotionDetector:
         self._last: FrameResult | None = None  # held for a repeated frame
         self._last_time: float | None = None  # of the last frame measured
         self._measured_at: int | None = None  # index of the last frame measured that differed
-        self._found_by: dict[int, tuple[str, ...]] = {}  # the reported tracks' detectors
+        self._before: dict[int, Region] = {}  # each reported track's last region
 
     def reset(self) -> None:
         """Start afresh (a new input, or after a gap in the frames)."""
@@ -136,7 +136,7 @@ class MotionDetector:
         """Forget what :meth:`judge` keeps (not the measurement's state,
         which the measuring thread owns)."""
         self._last = self._last_time = None
-        self._found_by = {}
+        self._before = {}
         self.tracker.reset()
         for det in self.detectors.values():
             det.reset()
@@ -280,11 +280,12 @@ class MotionDetector:
                 index, time_s, [], empty, known, None, flow, outputs, camera=camera, reason=reason
             )
         confirmed = self.tracker.update(objects, fit.homography)
+        motion = _frame_motion(flow, fit)
         regions = [
-            object_region(obj, outputs, flow.geometry, self._found_by.get(obj.track, ()))
+            object_region(obj, outputs, flow.geometry, self._before.get(obj.track), motion)
             for obj in confirmed
         ]
-        self._found_by = {r.track: r.detectors for r in regions if r.detectors}
+        self._before = {r.track: r for r in regions if r.detectors}
         mask = np.zeros(flow.shape, bool)
         for obj in confirmed:
             mask |= obj.mask
@@ -381,3 +382,13 @@ class MotionDetector:
         grown = [cv2.dilate(r.astype(np.uint8), _GROW) > 0 for r in recent]
         kept = [r for r in regions if all(g[r.cells[:, 0], r.cells[:, 1]].any() for g in grown)]
         return (regions_mask(kept) if kept else np.zeros_like(flagged)), kept
+
+
+def _frame_motion(flow: VelocityField, fit: CameraFit) -> FrameMotion | None:
+    """What the frame's objects' velocities are read from: its image velocity
+    and the fitted plane's residual over the time since the last frame
+    measured, leaving out half a flow patch round each object (how far DIS
+    smears a mover's velocity); None where that time is not known."""
+    if flow.interval_s is None or fit.residual_px is None:
+        return None
+    return FrameMotion(flow.velocity_px, fit.residual_px, flow.interval_s, flow.patch_px // 2)

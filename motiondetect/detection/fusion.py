@@ -7,6 +7,10 @@ one region (:func:`object_region`), naming the detectors that found it.
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
+
+import cv2
 import numpy as np
 
 from motiondetect.detection.base import DetectorOutput, cells_from_mask
@@ -37,14 +41,53 @@ def fuse(
     return flagged, fused
 
 
+@dataclass(frozen=True)
+class FrameMotion:
+    """What a frame's objects' velocities are read from.
+
+    Attributes
+    ----------
+    velocity : (h, w, 2) ndarray of float32
+        Image velocity, work px over ``interval_s``.
+    residual : (h, w, 2) ndarray of float32
+        ``velocity`` less the fitted camera motion's (the plane residual).
+    interval_s : float
+        Seconds the velocities span (positive).
+    rim_px : int
+        Width of the rim left out, work px: half a flow patch, how far the
+        flow smears a mover's velocity into what lies round it.
+    """
+
+    velocity: np.ndarray
+    residual: np.ndarray
+    interval_s: float
+    rim_px: int
+
+
+def object_velocities(
+    mask: np.ndarray, motion: FrameMotion
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The median image velocity and own velocity (the residual) of an
+    object, work px per second, over its (h, w) bool ``mask`` less a rim
+    ``motion.rim_px`` wide (the whole mask where that leaves nothing)."""
+    side = 2 * motion.rim_px + 1
+    core = cv2.erode(mask.astype(np.uint8), np.ones((side, side), np.uint8)) > 0
+    inside = core if core.any() else mask
+    image = np.median(motion.velocity[inside], axis=0) / motion.interval_s
+    own = np.median(motion.residual[inside], axis=0) / motion.interval_s
+    return (float(image[0]), float(image[1])), (float(own[0]), float(own[1]))
+
+
 def object_region(
     obj: MovingObject,
     outputs: dict[str, DetectorOutput],
     geometry: GridGeometry,
-    found_before: tuple[str, ...] = (),
+    before: Region | None = None,
+    motion: FrameMotion | None = None,
 ) -> Region:
-    """A tracked object as a reported region, in input pixels; a held one
-    names ``found_before``, the detectors that found its track last."""
+    """A tracked object as a reported region, in input pixels, with its
+    velocities where ``motion`` is given; a held one takes the detectors and
+    velocities of ``before``, its track's last region."""
     sx = geometry.input_size[0] / geometry.work_size[0]
     sy = geometry.input_size[1] / geometry.work_size[1]
     x0, y0, x1, y1 = obj.box
@@ -55,6 +98,19 @@ def object_region(
     found = tuple(n for n, out in outputs.items() if (out.mask[inside] & own).any())
     strength = max(float(out.pixel_strength[inside][own].mean()) for out in outputs.values())
     area = round(float(own.sum()) * sx * sy)
+    region = Region(bbox, cells, area, strength, found, obj.track, obj.held)
     if obj.held:
-        found = found_before or found
-    return Region(bbox, cells, area, strength, found, obj.track, obj.held)
+        if before is None:
+            return region
+        return dataclasses.replace(
+            region,
+            detectors=before.detectors or found,
+            velocity_px_s=before.velocity_px_s,
+            own_velocity_px_s=before.own_velocity_px_s,
+        )
+    if motion is None:
+        return region
+    (vx, vy), (ox, oy) = object_velocities(obj.mask, motion)
+    return dataclasses.replace(
+        region, velocity_px_s=(vx * sx, vy * sy), own_velocity_px_s=(ox * sx, oy * sy)
+    )

@@ -33,6 +33,15 @@ class Region:
     held : bool
         Not found on this frame: a confirmed track reported where its own
         motion puts it (``detectors`` are those that found it last).
+    velocity_px_s : (vx, vy) or None
+        How it moves in the picture, input px per second (x right, y down):
+        the median image velocity over its mask less a rim half a flow patch
+        wide (velocity path; a held region carries its track's last).
+    own_velocity_px_s : (vx, vy) or None
+        How it moves against what lies behind it: the same median of its
+        image velocity less the fitted camera motion's (the dominant plane's)
+        at each pixel, input px per second. Zero for a rigid point on that
+        plane, whatever the camera does.
     """
 
     bbox: list[int]
@@ -42,6 +51,8 @@ class Region:
     detectors: tuple[str, ...] = field(default_factory=tuple)
     track: int | None = None
     held: bool = False
+    velocity_px_s: tuple[float, float] | None = None
+    own_velocity_px_s: tuple[float, float] | None = None
 
     def to_json(self) -> dict:
         out = {
@@ -54,6 +65,10 @@ class Region:
             out["track"] = int(self.track)
         if self.held:
             out["held"] = True
+        for name in ("velocity_px_s", "own_velocity_px_s"):
+            value = getattr(self, name)
+            if value is not None:
+                out[name] = [round(float(v), 1) + 0.0 for v in value]  # no -0.0
         return out
 
 

@@ -29,6 +29,7 @@ class _Life:
     peak_score: float = -1.0
     detectors: set[str] = field(default_factory=set)
     reach: list[int] = field(init=False)  # x0, y0, x1, y1 around all its boxes
+    own: list[float] = field(default_factory=lambda: [0.0, 0.0, 0])  # own velocities summed, count
 
     def __post_init__(self) -> None:
         x, y, w, h = self.start_box
@@ -43,6 +44,14 @@ class _Life:
         self.detectors.update(detection["detectors"])
         r = self.reach
         r[:] = [min(r[0], x), min(r[1], y), max(r[2], x + w), max(r[3], y + h)]
+        own = detection.get("own_velocity_px_s")
+        if own is not None and not detection.get("held"):  # a held one repeats its last
+            self.own[:] = [self.own[0] + own[0], self.own[1] + own[1], self.own[2] + 1]
+
+    def mean_own(self) -> tuple[float, float] | tuple[str, str]:
+        """Its mean own velocity over the frames it was found on, px/s; empty without one."""
+        vx, vy, count = self.own
+        return (round(vx / count, 1), round(vy / count, 1)) if count else ("", "")
 
 
 def _centre(box: tuple[int, int, int, int]) -> tuple[float, float]:
@@ -76,11 +85,13 @@ class TrackTable:
         """One dict per track, by first frame then id: its first and last
         frame and time, the frames it was detected on, its peak score and
         frame, the detectors that flagged it, its box centre on the first
-        and last frame, and the box around all its boxes (input px)."""
+        and last frame, the box around all its boxes (input px), and its
+        mean own velocity (input px/s; empty where none was measured)."""
         rows = []
         for life in sorted(self._lives.values(), key=lambda t: (t.start_frame, t.track)):
             x0, y0, x1, y1 = life.reach
             (sx, sy), (ex, ey) = _centre(life.start_box), _centre(life.end_box)
+            own_x, own_y = life.mean_own()
             rows.append(
                 {
                     "track": life.track,
@@ -100,6 +111,8 @@ class TrackTable:
                     "end_cx": ex,
                     "end_cy": ey,
                     "bbox": [x0, y0, x1 - x0, y1 - y0],
+                    "own_vx_px_s": own_x,
+                    "own_vy_px_s": own_y,
                 }
             )
         return rows

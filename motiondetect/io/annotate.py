@@ -12,7 +12,7 @@ import numpy as np
 
 from motiondetect.constraint_ray.hough import REGIONS, STILL, UNKNOWN
 from motiondetect.detection.detector import FrameResult
-from motiondetect.io.colours import CLASS_COLOURS, DETECTOR_COLOURS, LEGEND
+from motiondetect.io.colours import CLASS_COLOURS, DETECTOR_COLOURS, LEGEND, OWN_MOTION
 from motiondetect.io.source import fitted
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
@@ -22,6 +22,10 @@ _LEFT_OUT = (160, 160, 160)  # the outline of a caption or logo left out
 #: Frames of a track's path drawn behind its box (:class:`Trails`): a second
 #: at 30 frames/s.
 TRAIL_FRAMES = 30
+
+#: Seconds of a detection's own motion (its velocity against what lies behind
+#: it) drawn as an arrow from its box's centre (:func:`draw_boxes`).
+OWN_ARROW_S = 0.5
 
 #: The overlay's text is readable from this width up (:func:`_text_size`): a
 #: narrower input (QCIF, the UCSD clips) is enlarged to it for the annotated
@@ -120,13 +124,24 @@ def draw_boxes(
 ) -> np.ndarray:
     """Draw detection records (as in frames.jsonl) on ``out`` in place: a box
     coloured by detector, the track id and the score (a held track's box
-    thin, labelled "held"); ``sx, sy`` scale the input-pixel boxes to ``out``."""
+    thin, labelled "held"), and from its centre a cyan arrow as long as its
+    own motion over :data:`OWN_ARROW_S` (its velocity against what lies
+    behind it, the camera's taken out); ``sx, sy`` scale the input-pixel
+    boxes to ``out``."""
     for det in detections:
         x, y, w, h = det["bbox"]
         colour = _box_colour(det)
         p0 = (int(x * sx), int(y * sy))
         p1 = (int((x + w) * sx) - 1, int((y + h) * sy) - 1)
         cv2.rectangle(out, p0, p1, colour, 1 if det.get("held") else 2)
+        own = det.get("own_velocity_px_s")
+        if own is not None:
+            cx, cy = (x + w / 2) * sx, (y + h / 2) * sy
+            tip = (cx + own[0] * OWN_ARROW_S * sx, cy + own[1] * OWN_ARROW_S * sy)
+            if np.hypot(tip[0] - cx, tip[1] - cy) >= 3:
+                start, end = (int(round(cx)), int(round(cy))), tuple(int(round(v)) for v in tip)
+                cv2.arrowedLine(out, start, end, (0, 0, 0), 3, tipLength=0.25)
+                cv2.arrowedLine(out, start, end, OWN_MOTION, 1, tipLength=0.25)
         label = f"#{det['track']} " if "track" in det else ""
         score = "held" if det.get("held") else f"{det['score']:.2f}"
         _text(out, f"{label}{score}", (p0[0] + 2, p0[1] + 14), colour)

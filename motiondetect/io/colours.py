@@ -27,3 +27,7 @@ DETECTOR_COLOURS = {
 }
 
 LEGEND = (("ray", RAY), ("animate", ANIMATE), ("both", BOTH))
+
+#: A detection's own motion, drawn as an arrow from its box's centre (cyan:
+#: apart from the detectors' colours and the normal path's white coarse field).
+OWN_MOTION = (255, 255, 0)

@@ -19,9 +19,13 @@ SCHEMA_VERSION = "1.0"
 
 # ``track``: the object's track id (empty where the detector keeps no tracks);
 # ``held``: 1 where the track was not found on the frame and is reported where
-# its own motion puts it (docs/detectors.md, "Held tracks"), else empty.
+# its own motion puts it (docs/detectors.md, "Held tracks"), else empty;
+# ``vx_px_s``, ``vy_px_s``: its image velocity, and ``own_vx_px_s``,
+# ``own_vy_px_s``: that less the camera's, input px per second (empty where
+# not measured: the paper's normal-flow path).
 DETECTION_COLUMNS = [
     "frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score", "track", "held",
+    "vx_px_s", "vy_px_s", "own_vx_px_s", "own_vy_px_s",
 ]  # fmt: skip
 EVENT_COLUMNS = [
     "event",
@@ -41,11 +45,12 @@ EVENT_COLUMNS = [
     "h",
 ]
 
-# One row per track (an object kept across frames): tracks.csv.
+# One row per track (an object kept across frames): tracks.csv; ``own_vx_px_s``,
+# ``own_vy_px_s``: its mean own velocity over the frames it was found on.
 TRACK_COLUMNS = [
     "track", "start_frame", "end_frame", "start_s", "end_s", "start_timecode",
     "end_timecode", "duration_s", "frames", "peak_frame", "peak_score", "detectors",
-    "start_cx", "start_cy", "end_cx", "end_cy", "x", "y", "w", "h",
+    "start_cx", "start_cy", "end_cx", "end_cy", "x", "y", "w", "h", "own_vx_px_s", "own_vy_px_s",
 ]  # fmt: skip
 
 
@@ -102,6 +107,8 @@ class DetectionsCsvWriter:
                 f"{detection['score']:.4f}",
                 detection.get("track", ""),
                 1 if detection.get("held") else "",
+                *detection.get("velocity_px_s", ("", "")),
+                *detection.get("own_velocity_px_s", ("", "")),
             ]
         )
 
@@ -148,7 +155,7 @@ def write_tracks_csv(fp: TextIO, tracks: list[dict]) -> None:
              f"{t['end_s']:.4f}", t["start_timecode"], t["end_timecode"],
              f"{t['duration_s']:.4f}", t["frames"], t["peak_frame"], f"{t['peak_score']:.4f}",
              "+".join(t["detectors"]), t["start_cx"], t["start_cy"], t["end_cx"], t["end_cy"],
-             *t["bbox"]]
+             *t["bbox"], t["own_vx_px_s"], t["own_vy_px_s"]]
         )  # fmt: skip
 
 
