@@ -65,17 +65,26 @@ class FrameMotion:
 
 
 def object_velocities(
-    mask: np.ndarray, motion: FrameMotion
+    mask: np.ndarray, box: tuple, motion: FrameMotion
 ) -> tuple[tuple[float, float], tuple[float, float]]:
     """The median image velocity and own velocity (the residual) of an
-    object, work px per second, over its (h, w) bool ``mask`` less a rim
-    ``motion.rim_px`` wide (the whole mask where that leaves nothing)."""
-    side = 2 * motion.rim_px + 1
-    core = cv2.erode(mask.astype(np.uint8), np.ones((side, side), np.uint8)) > 0
-    inside = core if core.any() else mask
-    image = np.median(motion.velocity[inside], axis=0) / motion.interval_s
-    own = np.median(motion.residual[inside], axis=0) / motion.interval_s
-    return (float(image[0]), float(image[1])), (float(own[0]), float(own[1]))
+    object, work px per second, over its (h, w) bool ``mask`` (empty outside
+    its (x0, y0, x1, y1) ``box``) less a rim ``motion.rim_px`` wide (the
+    whole mask where that leaves nothing)."""
+    rim, (h, w) = motion.rim_px, mask.shape
+    x0, y0 = max(int(box[0]) - rim, 0), max(int(box[1]) - rim, 0)
+    x1, y1 = min(int(np.ceil(box[2])) + rim, w), min(int(np.ceil(box[3])) + rim, h)
+    own_pixels = mask[y0:y1, x0:x1]
+    side = 2 * rim + 1
+    core = cv2.erode(own_pixels.astype(np.uint8), np.ones((side, side), np.uint8)) > 0
+    inside = core if core.any() else own_pixels
+    speeds = []
+    for field in (motion.velocity, motion.residual):
+        part = field[y0:y1, x0:x1]
+        speeds.append(
+            tuple(float(np.median(part[..., i][inside])) / motion.interval_s for i in (0, 1))
+        )
+    return speeds[0], speeds[1]
 
 
 def object_region(
@@ -110,7 +119,7 @@ def object_region(
         )
     if motion is None:
         return region
-    (vx, vy), (ox, oy) = object_velocities(obj.mask, motion)
+    (vx, vy), (ox, oy) = object_velocities(obj.mask, obj.box, motion)
     return dataclasses.replace(
         region, velocity_px_s=(vx * sx, vy * sy), own_velocity_px_s=(ox * sx, oy * sy)
     )
