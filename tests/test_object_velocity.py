@@ -10,7 +10,7 @@ import pytest
 from motiondetect import detect
 from motiondetect.detection.base import DetectorOutput
 from motiondetect.detection.detector import MotionDetector
-from motiondetect.detection.fusion import FrameMotion, object_region
+from motiondetect.detection.fusion import FrameMotion, object_region, object_velocities
 from motiondetect.detection.objects import MovingObject
 from motiondetect.measurement.normal_flow import GridGeometry
 
@@ -68,6 +68,7 @@ def test_a_mover_smaller_than_the_rim_is_measured_over_its_whole_mask():
     region = _region(mask, motion)
     inside = motion.velocity[mask]
     assert region.velocity_px_s == pytest.approx(tuple(np.median(inside, axis=0) * 60))
+    assert object_velocities(np.zeros_like(mask), (60, 40, 100, 80), motion) is None
 
 
 @pytest.mark.parametrize(

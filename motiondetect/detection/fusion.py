@@ -66,11 +66,11 @@ class FrameMotion:
 
 def object_velocities(
     mask: np.ndarray, box: tuple, motion: FrameMotion
-) -> tuple[tuple[float, float], tuple[float, float]]:
+) -> tuple[tuple[float, float], tuple[float, float]] | None:
     """The median image velocity and own velocity (the residual) of an
     object, work px per second, over its (h, w) bool ``mask`` (empty outside
     its (x0, y0, x1, y1) ``box``) less a rim ``motion.rim_px`` wide (the
-    whole mask where that leaves nothing)."""
+    whole mask where that leaves nothing); None for an empty mask."""
     rim, (h, w) = motion.rim_px, mask.shape
     x0, y0 = max(int(box[0]) - rim, 0), max(int(box[1]) - rim, 0)
     x1, y1 = min(int(np.ceil(box[2])) + rim, w), min(int(np.ceil(box[3])) + rim, h)
@@ -78,6 +78,8 @@ def object_velocities(
     side = 2 * rim + 1
     core = cv2.erode(own_pixels.astype(np.uint8), np.ones((side, side), np.uint8)) > 0
     inside = core if core.any() else own_pixels
+    if not inside.any():
+        return None
     speeds = []
     for field in (motion.velocity, motion.residual):
         part = field[y0:y1, x0:x1]
@@ -119,7 +121,10 @@ def object_region(
         )
     if motion is None:
         return region
-    (vx, vy), (ox, oy) = object_velocities(obj.mask, obj.box, motion)
+    velocities = object_velocities(obj.mask, obj.box, motion)
+    if velocities is None:
+        return region
+    (vx, vy), (ox, oy) = velocities
     return dataclasses.replace(
         region, velocity_px_s=(vx * sx, vy * sy), own_velocity_px_s=(ox * sx, oy * sy)
     )
