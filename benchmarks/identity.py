@@ -12,13 +12,15 @@ arrays.
 library found in ``--src`` (default: this checkout; any earlier checkout of
 the project works too) and writes a digest: per-frame detections (box,
 score, detectors), observer class, events, and a hash of every mask.
-Fields that a newer version added (``reliable``, ``track``, ``reason``) are
-left out, so a newer version's output can be compared with an older one's.
+Fields that a newer version added (``reliable``, ``track``, ``reason``, the
+velocities, and their columns in detections.csv) are left out, so a newer
+version's output can be compared with an older one's.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import hashlib
 import json
 import subprocess
@@ -76,12 +78,22 @@ def _frame(record: dict) -> dict:
     }
 
 
+#: detections.csv's columns every version writes; later ones (``track``,
+#: ``held``, the velocities) are left out, as in :func:`_frame`.
+CSV_COLUMNS = ("frame", "time_s", "detectors", "x", "y", "w", "h", "area_px", "score")
+
+
+def _csv_rows(path: Path) -> list[list[str]]:
+    rows = list(csv.DictReader(path.read_text().splitlines()))
+    return [[row[c] for c in CSV_COLUMNS] for row in rows]
+
+
 def digest_output(folder: Path) -> dict:
     frames = [json.loads(x) for x in (folder / "frames.jsonl").read_text().splitlines()]
     masks = sorted((folder / "masks").glob("*.png"))
     return {
         "frames": [_frame(r) for r in frames],
-        "detections_csv": (folder / "detections.csv").read_text(),
+        "detections_csv": _csv_rows(folder / "detections.csv"),
         "events_csv": (folder / "events.csv").read_text(),
         "masks": [hashlib.sha256(m.read_bytes()).hexdigest()[:16] for m in masks],
     }
