@@ -62,18 +62,25 @@ def test_image_sequence_and_lossless_video_give_identical_results(tmp_path, clip
         assert invoke("detect", src, "-o", tmp_path / out, "--no-video", "-q").exit_code == 0
     a = [json.loads(x) for x in (tmp_path / "a" / "seq" / "frames.jsonl").read_text().splitlines()]
     b = [json.loads(x) for x in (tmp_path / "b" / "seq" / "frames.jsonl").read_text().splitlines()]
-    assert [r["observer_motion"] for r in a] == [r["observer_motion"] for r in b]
     # Velocities are per second of each input's own times: the folder's are
     # 1/30 s apart, the Matroska file's rounded to its 1 ms time base (33,
     # 34, 33 ms ...), which moves them by up to 1/33 of their value.
-    speeds = ("velocity_px_s", "own_velocity_px_s")
+    speeds = ("velocity_px_s", "own_velocity_px_s", "view_velocity_px_s")
+
+    def apart(records: list[dict]) -> tuple[list[dict], list[list]]:
+        """The records without their velocities, and the velocities."""
+        rest = [{k: v for k, v in r.items() if k not in speeds} for r in records]
+        return rest, [r[k] for r in records for k in speeds if k in r]
+
     for x, y in zip(a, b):
-        assert [{k: v for k, v in d.items() if k not in speeds} for d in x["detections"]] == [
-            {k: v for k, v in d.items() if k not in speeds} for d in y["detections"]
-        ]
-        for d, e in zip(x["detections"], y["detections"]):
-            for key in speeds:
-                assert d[key] == pytest.approx(e[key], rel=1 / 30, abs=0.2)
+        for key in ("detections", "observer_motion"):
+            (rest_x, speeds_x), (rest_y, speeds_y) = (
+                apart(r[key] if key == "detections" else [r[key]]) for r in (x, y)
+            )
+            assert rest_x == rest_y
+            assert len(speeds_x) == len(speeds_y)
+            for u, v in zip(speeds_x, speeds_y):
+                assert u == pytest.approx(v, rel=1 / 30, abs=0.2)
 
 
 def test_info_and_version(clip, tmp_path):

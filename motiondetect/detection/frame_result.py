@@ -70,6 +70,24 @@ class FrameResult:
     def reliable(self) -> bool:
         return not self.reason
 
+    @property
+    def view_velocity_px_s(self) -> tuple[float, float] | None:
+        """How fast the view moves: the fitted camera motion's image velocity
+        (the dominant plane's) at the centre of the picture measured, input
+        px per second (x right, y down); None on a frame that could not be
+        judged, where no motion was fitted or where the time between the
+        frames is not known (the first two frames; velocity path only)."""
+        field = self.field
+        fit = self.camera
+        interval = getattr(field, "interval_s", None)
+        if not self.reliable or fit is None or fit.homography is None or not interval:
+            return None
+        (iw, ih), (ww, wh) = field.geometry.input_size, field.geometry.work_size
+        centre = np.array([[[ww / 2, wh / 2]]], np.float64)
+        before = cv2.perspectiveTransform(centre, fit.homography)[0, 0]
+        dx, dy = (centre[0, 0] - before) / interval
+        return float(dx * iw / ww), float(dy * ih / wh)
+
     def input_mask(self, width: int, height: int) -> np.ndarray:
         """Flagged pixels at input size, (height, width) uint8 0/255."""
         flagged = self.flagged_pixels.astype(np.uint8) * 255

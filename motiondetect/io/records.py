@@ -16,7 +16,11 @@ def _observer_record(result: FrameResult) -> dict:
     if result.observer is not None:
         return result.observer.to_json()
     if result.camera is not None:
-        return {"class": result.camera.class_id, **result.camera.to_json(), "params": {}}
+        record = {"class": result.camera.class_id, **result.camera.to_json(), "params": {}}
+        view = result.view_velocity_px_s
+        if view is not None:
+            record["view_velocity_px_s"] = [round(v, 1) + 0.0 for v in view]
+        return record
     name = "warm-up" if result.warm_up else "none"
     return {"class": -1, "name": name, "confidence": 0.0, "params": {}}
 
