@@ -274,3 +274,26 @@ def test_repeated_frames_are_counted_and_carry_the_last_result(tmp_path, clip_fr
     for r in repeats:
         assert r["held_from"] == r["frame"] - 1
         assert r["detections"] == records[r["frame"] - 1]["detections"]
+
+
+def test_the_batch_tracks_csv_takes_inputs_an_earlier_version_finished(tmp_path, clip_frames):
+    """An input finished by a version that wrote fewer tracks.csv columns
+    (before the own velocities) is skipped on the next run, and its rows in
+    the batch's tracks.csv have today's columns, the new ones empty."""
+    batch = tmp_path / "batch"
+    batch.mkdir()
+    for name in ("a.mp4", "b.mp4"):
+        write_video(batch / name, clip_frames[:10])
+    out = tmp_path / "out"
+    assert invoke("detect", batch, "-o", out, "--no-video", "-q").exit_code == 0
+    old = out / "a" / "tracks.csv"
+    rows = list(csv.reader(old.read_text().splitlines()))
+    assert len(rows) > 1  # the clip's mover is tracked
+    old.write_text("\n".join(",".join(row[:-2]) for row in rows) + "\n")  # the earlier columns
+    result = invoke("detect", batch, "-o", out, "--no-video", "-q")
+    assert result.exit_code == 0
+    batch_rows = list(csv.DictReader((out / "tracks.csv").read_text().splitlines()))
+    assert {row["input"] for row in batch_rows} == {str(batch / "a.mp4"), str(batch / "b.mp4")}
+    for row in batch_rows:
+        assert None not in row.values() and None not in row  # every row as long as the header
+        assert (row["own_vx_px_s"] == "") == (row["input"] == str(batch / "a.mp4"))

@@ -34,7 +34,12 @@ from motiondetect.app.inputs import (
 )
 from motiondetect.app.process import STREAM_STOP, process_input
 from motiondetect.app.settings import Settings
-from motiondetect.io.report import atomic_text, write_batch_tracks_csv, write_events_csv
+from motiondetect.io.report import (
+    TRACK_COLUMNS,
+    atomic_text,
+    write_batch_tracks_csv,
+    write_events_csv,
+)
 
 LOCK_NAME = ".motiondetect.lock"
 
@@ -297,14 +302,17 @@ def _write_batch_events(output: Path, results: list[InputResult]) -> None:
 
 
 def _write_batch_tracks(output: Path, results: list[InputResult]) -> None:
-    """One tracks.csv at the top level listing every finished input's tracks."""
+    """One tracks.csv at the top level listing every finished input's tracks,
+    by today's columns (an input finished by an earlier version, which wrote
+    fewer, leaves the later ones empty)."""
     rows = []
     for result in results:
         path = output / result.job.name / "tracks.csv"
         if result.status == "failed" or not path.is_file():
             continue
         with open(path, encoding="utf-8", newline="") as fp:
-            rows.extend([result.job.label, *row] for row in list(csv.reader(fp))[1:])
+            for row in csv.DictReader(fp):
+                rows.append([result.job.label, *(row.get(c) or "" for c in TRACK_COLUMNS)])
     with atomic_text(output / "tracks.csv") as fp:
         write_batch_tracks_csv(fp, rows)
 
