@@ -115,7 +115,7 @@ def object_region(
             return region
         return dataclasses.replace(
             region,
-            detectors=before.detectors or found,
+            detectors=before.detectors,
             velocity_px_s=before.velocity_px_s,
             own_velocity_px_s=before.own_velocity_px_s,
         )

@@ -68,8 +68,13 @@ class Region:
         for name in ("velocity_px_s", "own_velocity_px_s"):
             value = getattr(self, name)
             if value is not None:
-                out[name] = [round(float(v), 1) + 0.0 for v in value]  # no -0.0
+                out[name] = velocity_json(value)
         return out
+
+
+def velocity_json(value: tuple[float, float]) -> list[float]:
+    """A velocity, px/s, as written to frames.jsonl: to 0.1, never -0.0."""
+    return [round(float(v), 1) + 0.0 for v in value]
 
 
 def drop_isolated(flagged: np.ndarray, min_neighbours: int) -> np.ndarray:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from motiondetect import __version__
 from motiondetect.detection.detector import FrameResult
+from motiondetect.detection.regions import velocity_json
 from motiondetect.io.report import SCHEMA_VERSION
 from motiondetect.io.video import VideoInfo
 
@@ -19,7 +20,7 @@ def _observer_record(result: FrameResult) -> dict:
         record = {"class": result.camera.class_id, **result.camera.to_json(), "params": {}}
         view = result.view_velocity_px_s
         if view is not None:
-            record["view_velocity_px_s"] = [round(v, 1) + 0.0 for v in view]
+            record["view_velocity_px_s"] = velocity_json(view)
         return record
     name = "warm-up" if result.warm_up else "none"
     return {"class": -1, "name": name, "confidence": 0.0, "params": {}}
