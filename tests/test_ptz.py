@@ -96,18 +96,11 @@ def test_preset_switches_are_cuts_and_the_walkers_are_found_again(tmp_path):
     assert m["false_alarm_regions_per_frame"] <= 0.2
 
 
-def _sbi_spare() -> tuple[list[np.ndarray], int]:
-    """IBMtest2's frames, and how far the window can move across them, px."""
-    source = shared_path("sbi", "IBMtest2")
-    images = [cv2.imread(str(p)) for p in sorted((source / "input").glob("*.png"), key=last_number)]
-    return images, images[0].shape[1] - round(WINDOW * images[0].shape[1])
-
-
-def _own_and_image(speed_px: float) -> list[list[tuple]]:
-    """Per frame of IBMtest2 seen through the window panning ``speed_px`` a
-    frame: (box centre in the clip's own pixels, velocity, own velocity) of
-    each detection found on it, px/s at 30 frames/s."""
-    images, spare = _sbi_spare()
+def _own_and_image(images: list[np.ndarray], spare: int, speed_px: float) -> list[list[tuple]]:
+    """Per frame of ``images`` seen through the window panning ``speed_px`` a
+    frame (``spare``: how far it can move, px): (box centre in the clip's
+    own pixels, velocity, own velocity) of each detection found on it, px/s
+    at 30 frames/s."""
     frames = [seen(image, t, speed_px, 0) for t, image in enumerate(images)]
     found = []
     for t, result in enumerate(motiondetect.detect(frames, fps=30.0)):
@@ -132,8 +125,10 @@ def test_a_walkers_own_velocity_does_not_depend_on_the_pan():
     panning 4.5 px a frame (135 px/s, turning back at each end): its image
     velocity differs by the window's motion, its own velocity (the camera's
     taken out) hardly at all."""
-    still, panning = _own_and_image(0.0), _own_and_image(4.5)
-    spare = _sbi_spare()[1]
+    source = shared_path("sbi", "IBMtest2")
+    images = [cv2.imread(str(p)) for p in sorted((source / "input").glob("*.png"), key=last_number)]
+    spare = images[0].shape[1] - round(WINDOW * images[0].shape[1])
+    still, panning = (_own_and_image(images, spare, speed) for speed in (0.0, 4.5))
     own_gaps, image_gaps = [], []
     for t in range(2, len(still)):
         shift = window_x(t, spare, 4.5, 0) - window_x(t - 1, spare, 4.5, 0)
